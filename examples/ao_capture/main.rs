@@ -1,0 +1,282 @@
+//! Renders a glTF scene headless through its first camera and writes the AO buffer as a 16-bit
+//! grayscale PNG of linear visibility (65535 = open, and 65535 where no geometry is).
+//!
+//! ```text
+//! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
+//!     --radius R --technique NAME [--preset low|medium|high|ultra] [--frames N] \
+//!     [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+//! ```
+//!
+//! `--technique list` prints the technique names. Bevy's own SSAO (`bevy-ssao`) has a radius
+//! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
+
+#[path = "../common/mod.rs"]
+mod common;
+mod options;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bevy::app::ScheduleRunnerPlugin;
+use bevy::asset::{AssetPlugin, LoadState};
+use bevy::camera::RenderTarget;
+use bevy::gltf::{Gltf, GltfAssetLabel};
+use bevy::prelude::*;
+use bevy::render::{
+    gpu_readback::{Readback, ReadbackComplete},
+    render_resource::TextureFormat,
+    view::screenshot::{Screenshot, ScreenshotCaptured},
+};
+use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::png16::write_visibility_png;
+use options::Options;
+
+/// Frames a scene may take to load before the run gives up.
+const LOAD_TIMEOUT_FRAMES: u32 = 2000;
+
+fn main() {
+    let options = match Options::parse(std::env::args().skip(1)) {
+        Ok(Some(options)) => options,
+        Ok(None) => return,
+        Err(message) => {
+            eprintln!("ao_capture: {message}");
+            std::process::exit(2);
+        }
+    };
+    let folder = options.scene.parent().map(PathBuf::from).unwrap_or_default();
+    let file = options
+        .scene
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+
+    let mut app = App::new();
+    app.add_plugins((
+        common::headless_plugins().set(AssetPlugin {
+            file_path: folder.to_string_lossy().into_owned(),
+            ..default()
+        }),
+        ScheduleRunnerPlugin::run_loop(Duration::ZERO),
+        DynamicAoPlugin,
+    ))
+    .insert_resource(Capture {
+        options,
+        file,
+        stage: Stage::Loading,
+        frames: 0,
+        gltf: Handle::default(),
+        scene: Handle::default(),
+        root: None,
+        readback: None,
+        visibility: None,
+        color_done: false,
+        failure: None,
+    })
+    .add_systems(Startup, load_scene)
+    .add_systems(Update, drive);
+    let exit = app.run();
+    if let AppExit::Error(_) = exit {
+        std::process::exit(1);
+    }
+}
+
+#[derive(PartialEq, Eq, Debug, Clone, Copy)]
+enum Stage {
+    Loading,
+    Rendering { until: u32 },
+    Reading,
+}
+
+#[derive(Resource)]
+struct Capture {
+    options: Options,
+    file: String,
+    stage: Stage,
+    frames: u32,
+    gltf: Handle<Gltf>,
+    scene: Handle<WorldAsset>,
+    root: Option<Entity>,
+    readback: Option<AoReadback>,
+    visibility: Option<Vec<f32>>,
+    color_done: bool,
+    failure: Option<String>,
+}
+
+fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
+    capture.gltf = assets.load(capture.file.clone());
+    capture.scene = assets.load(GltfAssetLabel::Scene(0).from_asset(capture.file.clone()));
+    let root = commands
+        .spawn(WorldAssetRoot(capture.scene.clone()))
+        .observe(scene_ready)
+        .id();
+    capture.root = Some(root);
+}
+
+/// Once the scene is spawned: pick its first camera, point it at our image, pose the animation.
+fn scene_ready(
+    ready: On<WorldInstanceReady>,
+    mut commands: Commands,
+    mut capture: ResMut<Capture>,
+    children: Query<&Children>,
+    cameras: Query<(), With<Camera3d>>,
+    players: Query<Entity, With<AnimationPlayer>>,
+    gltfs: Res<Assets<Gltf>>,
+    mut graphs: ResMut<Assets<AnimationGraph>>,
+    mut images: ResMut<Assets<Image>>,
+) {
+    // Depth-first in node order: the first camera of the glTF file.
+    let mut stack = vec![ready.entity];
+    let mut found = Vec::new();
+    while let Some(entity) = stack.pop() {
+        if cameras.contains(entity) {
+            found.push(entity);
+        }
+        if let Ok(kids) = children.get(entity) {
+            stack.extend(kids.iter().rev());
+        }
+    }
+    let Some((&camera, others)) = found.split_first() else {
+        capture.failure = Some(format!("{} has no camera", capture.options.scene.display()));
+        return;
+    };
+    for &other in others {
+        commands.entity(other).insert(Camera {
+            is_active: false,
+            ..default()
+        });
+    }
+    let options = &capture.options;
+    let size = UVec2::new(options.width, options.height);
+    let target = images.add(Image::new_target_texture(
+        size.x,
+        size.y,
+        TextureFormat::Rgba8UnormSrgb,
+        None,
+    ));
+    let readback = AoReadback::new(&mut images, size);
+    commands.entity(camera).insert((
+        RenderTarget::Image(target.into()),
+        Msaa::Off,
+        DynamicAo {
+            technique: options.technique,
+            quality: options.preset,
+            radius: options.radius,
+            ..default()
+        },
+        readback.clone(),
+    ));
+    capture.readback = Some(readback);
+
+    if let Some(clip) = gltfs
+        .get(&capture.gltf)
+        .and_then(|gltf| gltf.animations.first().cloned())
+    {
+        let (graph, node) = AnimationGraph::from_clip(clip);
+        let graph = graphs.add(graph);
+        let time = capture.options.time;
+        for player in &players {
+            commands.entity(player).insert(AnimationGraphHandle(graph.clone()));
+            commands.queue(move |world: &mut World| {
+                if let Some(mut player) = world.get_mut::<AnimationPlayer>(player) {
+                    player.play(node).seek_to(time).pause();
+                }
+            });
+        }
+    }
+    let until = capture.frames + capture.options.frames;
+    capture.stage = Stage::Rendering { until };
+}
+
+fn drive(
+    mut commands: Commands,
+    mut capture: ResMut<Capture>,
+    assets: Res<AssetServer>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    capture.frames += 1;
+    if let Some(failure) = capture.failure.take() {
+        eprintln!("ao_capture: {failure}");
+        exit.write(AppExit::error());
+        return;
+    }
+    match capture.stage {
+        Stage::Loading => {
+            if let Some(LoadState::Failed(err)) = assets.get_load_state(&capture.scene) {
+                eprintln!("ao_capture: cannot load {}: {err}", capture.options.scene.display());
+                exit.write(AppExit::error());
+            } else if capture.frames > LOAD_TIMEOUT_FRAMES {
+                eprintln!("ao_capture: {} did not load in time", capture.options.scene.display());
+                exit.write(AppExit::error());
+            }
+        }
+        Stage::Rendering { until } if capture.frames >= until => {
+            let Some(readback) = capture.readback.clone() else {
+                return;
+            };
+            commands
+                .spawn(Readback::texture(readback.visibility.clone()))
+                .observe(store_visibility);
+            capture.stage = Stage::Reading;
+        }
+        Stage::Rendering { .. } => {}
+        Stage::Reading => {
+            let color_ready = capture.options.out_color.is_none() || capture.color_done;
+            if let (Some(visibility), true) = (capture.visibility.as_ref(), color_ready) {
+                let options = &capture.options;
+                if let Err(err) =
+                    write_visibility_png(&options.out_ao, options.width, options.height, visibility)
+                {
+                    eprintln!("ao_capture: cannot write {}: {err}", options.out_ao.display());
+                    exit.write(AppExit::error());
+                    return;
+                }
+                let open = visibility.iter().sum::<f32>() / visibility.len().max(1) as f32;
+                println!(
+                    "ao_capture: {} technique {} radius {} -> {} (mean visibility {open:.4})",
+                    options.scene.display(),
+                    options.technique.name(),
+                    options.radius,
+                    options.out_ao.display()
+                );
+                exit.write(AppExit::Success);
+            } else if capture.frames > LOAD_TIMEOUT_FRAMES * 2 {
+                eprintln!("ao_capture: the GPU read-back never completed");
+                exit.write(AppExit::error());
+            }
+        }
+    }
+}
+
+fn store_visibility(
+    readback: On<ReadbackComplete>,
+    mut commands: Commands,
+    mut capture: ResMut<Capture>,
+    cameras: Query<&RenderTarget, With<AoReadback>>,
+) {
+    if capture.visibility.is_some() {
+        return;
+    }
+    let (w, h) = (capture.options.width as usize, capture.options.height as usize);
+    capture.visibility = Some(common::unpad_f32(&readback.data, w, h, 1));
+    commands.entity(readback.entity).despawn();
+    // The lit image is captured once the AO is, from the same frame onwards.
+    if let Some(out) = capture.options.out_color.clone() {
+        if let Some(RenderTarget::Image(target)) = cameras.iter().next() {
+            commands
+                .spawn(Screenshot::image(target.handle.clone()))
+                .observe(move |shot: On<ScreenshotCaptured>, mut capture: ResMut<Capture>| {
+                    match shot.image.clone().try_into_dynamic() {
+                        Ok(image) => {
+                            if let Err(err) = image.to_rgba8().save(&out) {
+                                capture.failure =
+                                    Some(format!("cannot write {}: {err}", out.display()));
+                            }
+                        }
+                        Err(err) => capture.failure = Some(format!("cannot convert the image: {err}")),
+                    }
+                    capture.color_done = true;
+                });
+        }
+    }
+}

@@ -1,0 +1,112 @@
+//! The command line of `ao_capture`.
+
+use std::path::PathBuf;
+
+use bevy_dynamic_ao::{AoQuality, AoTechnique};
+
+use crate::common::parse_number;
+
+pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
+--technique NAME [--preset low|medium|high|ultra] [--frames N] [--time SECONDS] \
+--out-ao AO.png [--out-color COLOR.png]
+       ao_capture --technique list";
+
+/// What one capture does.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub scene: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    /// World-space AO radius, metres.
+    pub radius: f32,
+    pub technique: AoTechnique,
+    pub preset: AoQuality,
+    /// Frames rendered after the scene is posed, before the capture.
+    pub frames: u32,
+    /// Animation time of the scene's first animation, seconds.
+    pub time: f32,
+    pub out_ao: PathBuf,
+    pub out_color: Option<PathBuf>,
+}
+
+impl Options {
+    /// `Ok(None)`: a listing or help was printed, nothing to render.
+    pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
+        let (mut scene, mut width, mut height, mut radius, mut technique) = (None, None, None, None, None);
+        let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
+        let (mut out_ao, mut out_color) = (None, None);
+        let mut args = args.into_iter();
+        while let Some(flag) = args.next() {
+            let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
+            match flag.as_str() {
+                "--scene" => scene = Some(PathBuf::from(value()?)),
+                "--width" => width = Some(parse_number("--width", &value()?, 1u32)?),
+                "--height" => height = Some(parse_number("--height", &value()?, 1u32)?),
+                "--radius" => {
+                    let text = value()?;
+                    radius = Some(
+                        text.parse::<f32>()
+                            .ok()
+                            .filter(|r| r.is_finite() && *r > 0.0)
+                            .ok_or(format!("--radius takes a positive number, got '{text}'"))?,
+                    );
+                }
+                "--technique" => {
+                    let name = value()?;
+                    if name == "list" {
+                        for (name, _) in AoTechnique::ALL {
+                            println!("{name}");
+                        }
+                        return Ok(None);
+                    }
+                    let names: Vec<&str> = AoTechnique::ALL.iter().map(|(n, _)| *n).collect();
+                    technique = Some(AoTechnique::from_name(&name).ok_or(format!(
+                        "unknown technique '{name}' (known: {})",
+                        names.join(", ")
+                    ))?);
+                }
+                "--preset" => {
+                    let name = value()?;
+                    preset = AoQuality::from_name(&name).ok_or(format!(
+                        "unknown preset '{name}' (known: low, medium, high, ultra)"
+                    ))?;
+                }
+                "--frames" => frames = parse_number("--frames", &value()?, 1u32)?,
+                "--time" => {
+                    let text = value()?;
+                    time = text
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|t| t.is_finite() && *t >= 0.0)
+                        .ok_or(format!("--time takes a number of seconds ≥ 0, got '{text}'"))?;
+                }
+                "--out-ao" => out_ao = Some(PathBuf::from(value()?)),
+                "--out-color" => out_color = Some(PathBuf::from(value()?)),
+                "--help" | "-h" => {
+                    println!("{USAGE}");
+                    return Ok(None);
+                }
+                other => return Err(format!("unknown argument '{other}' (see --help)")),
+            }
+        }
+        let missing = |name: &str| format!("{name} is required (see --help)");
+        let scene = scene.ok_or_else(|| missing("--scene"))?;
+        if !scene.is_file() {
+            return Err(format!("scene file {} not found", scene.display()));
+        }
+        // Bevy's asset server wants an absolute folder to load from.
+        let scene = std::fs::canonicalize(&scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+        Ok(Some(Options {
+            scene,
+            width: width.ok_or_else(|| missing("--width"))?,
+            height: height.ok_or_else(|| missing("--height"))?,
+            radius: radius.ok_or_else(|| missing("--radius"))?,
+            technique: technique.ok_or_else(|| missing("--technique"))?,
+            preset,
+            frames,
+            time,
+            out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,
+            out_color,
+        }))
+    }
+}

@@ -1,0 +1,165 @@
+//! A small room with boxes, a ball and stairs, lit by a sun and ambient light, with dynamic AO.
+//!
+//! Windowed: `cargo run --example basic`.
+//! Headless: `cargo run --example basic -- --headless --frames 10 --out basic.png`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::prelude::*;
+use bevy_dynamic_ao::prelude::*;
+use common::{ExampleArgs, HelpLine};
+
+const USAGE: &str = "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
+keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer, Esc quit";
+
+fn main() {
+    let args = ExampleArgs::parse(USAGE);
+    let mut app = common::example_app("bevy_dynamic_ao: basic", &args);
+    app.add_plugins(DynamicAoPlugin)
+        .add_systems(Startup, setup)
+        .add_systems(Update, (controls, show_settings, spin))
+        .run();
+}
+
+#[derive(Component)]
+struct Spin;
+
+fn setup(world: &mut World) {
+    let target = common::camera_target(world);
+    let mut commands = world.commands();
+    let mut camera = commands.spawn((
+        Camera3d::default(),
+        Transform::from_xyz(-3.2, 2.6, 4.6).looking_at(Vec3::new(0.3, 0.6, 0.0), Vec3::Y),
+        Msaa::Off,
+        Tonemapping::AcesFitted,
+        DynamicAo::default(),
+        AmbientLight {
+            brightness: 900.0,
+            ..default()
+        },
+    ));
+    if let Some(target) = target {
+        camera.insert(target);
+    }
+    common::spawn_help_line(&mut commands);
+    world.flush();
+
+    let mut meshes = world.resource_mut::<Assets<Mesh>>();
+    let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));
+    let wall = meshes.add(Cuboid::new(12.0, 4.0, 0.2));
+    let cube = meshes.add(Cuboid::new(1.0, 1.0, 1.0));
+    let ball = meshes.add(Sphere::new(0.5).mesh().uv(48, 24));
+    let step = meshes.add(Cuboid::new(1.6, 0.25, 0.4));
+    let mut materials = world.resource_mut::<Assets<StandardMaterial>>();
+    let white = materials.add(StandardMaterial {
+        base_color: Color::srgb(0.85, 0.85, 0.82),
+        perceptual_roughness: 0.9,
+        ..default()
+    });
+    let orange = materials.add(StandardMaterial {
+        base_color: Color::srgb(0.9, 0.45, 0.2),
+        perceptual_roughness: 0.6,
+        ..default()
+    });
+    let mut commands = world.commands();
+    commands.spawn((Mesh3d(floor), MeshMaterial3d(white.clone())));
+    commands.spawn((
+        Mesh3d(wall),
+        MeshMaterial3d(white.clone()),
+        Transform::from_xyz(0.0, 2.0, -1.6),
+    ));
+    commands.spawn((
+        Mesh3d(cube.clone()),
+        MeshMaterial3d(orange.clone()),
+        Transform::from_xyz(-1.2, 0.5, -0.9),
+        Spin,
+    ));
+    commands.spawn((
+        Mesh3d(cube),
+        MeshMaterial3d(white.clone()),
+        Transform::from_xyz(-0.4, 0.5, 0.6).with_scale(Vec3::new(0.6, 1.0, 0.6)),
+    ));
+    commands.spawn((
+        Mesh3d(ball),
+        MeshMaterial3d(orange),
+        Transform::from_xyz(1.0, 0.5, -0.6),
+    ));
+    for i in 0..5 {
+        commands.spawn((
+            Mesh3d(step.clone()),
+            MeshMaterial3d(white.clone()),
+            Transform::from_xyz(2.4, 0.125 + 0.25 * i as f32, -1.3 + 0.4 * i as f32),
+        ));
+    }
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 3_000.0,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(3.0, 6.0, 2.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+}
+
+fn spin(time: Res<Time>, mut spinning: Query<&mut Transform, With<Spin>>) {
+    for mut transform in &mut spinning {
+        transform.rotate_y(time.delta_secs() * 0.4);
+    }
+}
+
+fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>) {
+    for mut ao in &mut cameras {
+        if keys.just_pressed(KeyCode::Space) {
+            ao.technique = match ao.technique {
+                AoTechnique::Off => AoTechnique::NearField,
+                _ => AoTechnique::Off,
+            };
+        }
+        if keys.just_pressed(KeyCode::KeyB) {
+            ao.technique = match ao.technique {
+                AoTechnique::BevySsao => AoTechnique::NearField,
+                _ => AoTechnique::BevySsao,
+            };
+        }
+        if keys.just_pressed(KeyCode::KeyD) {
+            ao.debug_view = !ao.debug_view;
+        }
+        if keys.just_pressed(KeyCode::KeyL) {
+            let mut params = ao.quality.params();
+            params.back_layer = !params.back_layer;
+            ao.quality = AoQuality::Custom(params);
+        }
+        for (key, quality) in [
+            KeyCode::Digit1,
+            KeyCode::Digit2,
+            KeyCode::Digit3,
+            KeyCode::Digit4,
+        ]
+        .into_iter()
+        .zip(AoQuality::PRESETS)
+        {
+            if keys.just_pressed(key) {
+                ao.quality = quality;
+            }
+        }
+    }
+}
+
+fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<HelpLine>>) {
+    let (Ok(ao), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
+        return;
+    };
+    let params = ao.quality.params();
+    text.0 = format!(
+        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | debug view {}\n\
+         Space AO on/off  B Bevy SSAO  D debug view  1-4 presets  L back layer  Esc quit",
+        ao.technique.name(),
+        ao.quality.name(),
+        params.max_samples,
+        if params.back_layer { "on" } else { "off" },
+        ao.radius,
+        if ao.debug_view { "on" } else { "off" },
+    );
+}

@@ -1,0 +1,230 @@
+//! Shared by every example (and the GPU tests): command-line flags, the app in windowed or
+//! headless form, the on-screen help line and the `--headless --frames N --out file.png` run.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bevy::app::ScheduleRunnerPlugin;
+use bevy::camera::RenderTarget;
+use bevy::diagnostic::FrameCount;
+use bevy::prelude::*;
+use bevy::render::{
+    RenderPlugin,
+    render_resource::TextureFormat,
+    view::screenshot::{Screenshot, save_to_disk},
+};
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+
+/// Flags every example understands.
+#[derive(Clone, Debug)]
+pub struct ExampleArgs {
+    /// Render without a window, to `out`.
+    pub headless: bool,
+    /// Frames to render before the capture in headless mode.
+    pub frames: u32,
+    /// Where the headless run writes its PNG.
+    pub out: Option<PathBuf>,
+    /// Image size of the headless run, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Flags the common parser did not recognise, for the example's own use.
+    pub rest: Vec<String>,
+}
+
+impl ExampleArgs {
+    /// Parses `std::env::args`, printing `usage` and exiting on `--help` or a bad value.
+    pub fn parse(usage: &str) -> Self {
+        match Self::try_parse(std::env::args().skip(1)) {
+            Ok(args) => args,
+            Err(message) => {
+                if message.is_empty() {
+                    println!("{usage}");
+                    std::process::exit(0);
+                }
+                eprintln!("error: {message}\n{usage}");
+                std::process::exit(2);
+            }
+        }
+    }
+
+    /// Parses flags; `Err("")` means help was asked for.
+    pub fn try_parse(args: impl IntoIterator<Item = String>) -> Result<Self, String> {
+        let mut parsed = ExampleArgs {
+            headless: false,
+            frames: 30,
+            out: None,
+            width: 640,
+            height: 480,
+            rest: Vec::new(),
+        };
+        let mut args = args.into_iter();
+        while let Some(arg) = args.next() {
+            let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
+            match arg.as_str() {
+                "--headless" => parsed.headless = true,
+                "--frames" => parsed.frames = parse_number("--frames", &value("--frames")?, 1)?,
+                "--out" => parsed.out = Some(PathBuf::from(value("--out")?)),
+                "--width" => parsed.width = parse_number("--width", &value("--width")?, 1)?,
+                "--height" => parsed.height = parse_number("--height", &value("--height")?, 1)?,
+                "--help" | "-h" => return Err(String::new()),
+                _ => parsed.rest.push(arg),
+            }
+        }
+        if parsed.headless && parsed.out.is_none() {
+            parsed.out = Some(PathBuf::from("out.png"));
+        }
+        Ok(parsed)
+    }
+}
+
+/// Parses a whole number of at least `min`, with a one-line error naming the flag.
+pub fn parse_number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
+    flag: &str,
+    text: &str,
+    min: T,
+) -> Result<T, String> {
+    match text.parse::<T>() {
+        Ok(v) if v >= min => Ok(v),
+        _ => Err(format!("{flag} takes a number of at least {min}, got '{text}'")),
+    }
+}
+
+/// Bevy's default plugins without a window or winit; pipelines compile synchronously so the
+/// first frames are deterministic. The app is driven by `app.update()` or a zero-delay loop.
+pub fn headless_plugins() -> impl PluginGroup {
+    DefaultPlugins
+        .set(WindowPlugin {
+            primary_window: None,
+            exit_condition: ExitCondition::DontExit,
+            close_when_requested: false,
+            ..default()
+        })
+        .set(RenderPlugin {
+            synchronous_pipeline_compilation: true,
+            ..default()
+        })
+        .disable::<WinitPlugin>()
+}
+
+/// The app of an example: a window titled `title`, or headless when `--headless` was given.
+pub fn example_app(title: &str, args: &ExampleArgs) -> App {
+    let mut app = App::new();
+    if args.headless {
+        app.add_plugins((
+            headless_plugins(),
+            ScheduleRunnerPlugin::run_loop(Duration::ZERO),
+        ));
+        app.insert_resource(HeadlessRun {
+            frames: args.frames,
+            out: args.out.clone().unwrap_or_else(|| PathBuf::from("out.png")),
+            size: UVec2::new(args.width, args.height),
+            target: None,
+            done: false,
+        })
+        .add_systems(Update, headless_capture);
+    } else {
+        app.add_plugins(DefaultPlugins.set(WindowPlugin {
+            primary_window: Some(Window {
+                title: title.into(),
+                ..default()
+            }),
+            ..default()
+        }))
+        .add_systems(Update, exit_on_escape);
+    }
+    app
+}
+
+/// Where a camera should render: an image in headless mode (`None` means the window).
+pub fn camera_target(world: &mut World) -> Option<RenderTarget> {
+    let size = world.get_resource::<HeadlessRun>()?.size;
+    let image = Image::new_target_texture(size.x, size.y, TextureFormat::Rgba8UnormSrgb, None);
+    let handle = world.resource_mut::<Assets<Image>>().add(image);
+    world.resource_mut::<HeadlessRun>().target = Some(handle.clone());
+    Some(RenderTarget::Image(handle.into()))
+}
+
+/// State of a headless run.
+#[derive(Resource)]
+pub struct HeadlessRun {
+    pub frames: u32,
+    pub out: PathBuf,
+    pub size: UVec2,
+    pub target: Option<Handle<Image>>,
+    pub done: bool,
+}
+
+fn headless_capture(
+    mut commands: Commands,
+    run: Res<HeadlessRun>,
+    frame: Res<FrameCount>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    if frame.0 == run.frames {
+        let Some(target) = run.target.clone() else {
+            eprintln!("error: the example spawned no camera for the headless run");
+            exit.write(AppExit::error());
+            return;
+        };
+        let out = run.out.clone();
+        commands
+            .spawn(Screenshot::image(target))
+            .observe(save_to_disk(out.clone()))
+            .observe(move |_: On<bevy::render::view::screenshot::ScreenshotCaptured>, mut run: ResMut<HeadlessRun>| {
+                run.done = true;
+            });
+    }
+    if run.done && run.out.exists() {
+        println!("wrote {}", run.out.display());
+        exit.write(AppExit::Success);
+    } else if frame.0 > run.frames + 120 {
+        eprintln!("error: the screenshot never arrived");
+        exit.write(AppExit::error());
+    }
+}
+
+fn exit_on_escape(keys: Res<ButtonInput<KeyCode>>, mut exit: MessageWriter<AppExit>) {
+    if keys.just_pressed(KeyCode::Escape) {
+        exit.write(AppExit::Success);
+    }
+}
+
+/// Marker of the on-screen help line.
+#[derive(Component)]
+pub struct HelpLine;
+
+/// Spawns the help line in the top-left corner.
+pub fn spawn_help_line(commands: &mut Commands) {
+    commands.spawn((
+        HelpLine,
+        Text::new(""),
+        TextFont {
+            font_size: FontSize::Px(15.0),
+            ..default()
+        },
+        Node {
+            position_type: PositionType::Absolute,
+            top: px(8.0),
+            left: px(8.0),
+            ..default()
+        },
+    ));
+}
+
+/// Float texels of a GPU read-back (rows padded to 256 bytes) as a dense row-major vector of
+/// `channels` floats per pixel.
+pub fn unpad_f32(data: &[u8], width: usize, height: usize, channels: usize) -> Vec<f32> {
+    let row = width * channels * 4;
+    let stride = row.div_ceil(256) * 256;
+    let mut out = Vec::with_capacity(width * height * channels);
+    for y in 0..height {
+        let start = y * stride;
+        let Some(bytes) = data.get(start..start + row) else {
+            break;
+        };
+        out.extend(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+    }
+    out
+}

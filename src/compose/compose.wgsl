@@ -1,0 +1,33 @@
+// Combined ambient occlusion (Shanmugam & Arikan 2007, §6): the terms add and clamp, and the
+// result is handed to Bevy's PBR lighting as visibility, 1 − occlusion.
+
+struct Settings {
+    radius: f32,
+    intensity: f32,
+    max_samples: u32,
+    min_samples: u32,
+    back_layer: u32,
+    near_field: u32,
+}
+
+@group(0) @binding(0) var<uniform> settings: Settings;
+@group(0) @binding(1) var near_occlusion: texture_2d<f32>;
+#ifdef VISIBILITY_R16FLOAT
+@group(0) @binding(2) var visibility: texture_storage_2d<r16float, write>;
+#else
+@group(0) @binding(2) var visibility: texture_storage_2d<r32float, write>;
+#endif
+
+@compute @workgroup_size(8, 8, 1)
+fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = textureDimensions(visibility);
+    if id.x >= dims.x || id.y >= dims.y {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    var occlusion = 0.0;
+    if settings.near_field != 0u {
+        occlusion += textureLoad(near_occlusion, pixel, 0).r;
+    }
+    textureStore(visibility, pixel, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
+}

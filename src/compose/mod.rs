@@ -1,0 +1,96 @@
+//! Combining the occlusion terms and handing the result to Bevy's PBR lighting.
+//!
+//! Near and far terms add and clamp (Shanmugam & Arikan 2007, §6); this pass writes the
+//! result as **visibility** (1 = open) into the texture Bevy binds for its own SSAO
+//! (`ScreenSpaceAmbientOcclusionResources::screen_space_ambient_occlusion_texture`, mesh view
+//! binding 17). Bevy's PBR shader applies that texture to ambient/indirect diffuse light and
+//! environment specular only, so direct lights are never darkened. Bevy's own SSAO pass is
+//! skipped on views where ours runs, by removing its pipeline id once our pipelines are ready.
+//!
+//! The debug view draws the same visibility over the lit image, full screen.
+
+mod debug_view;
+mod node;
+mod pipeline;
+
+use bevy::app::{App, Plugin};
+use bevy::asset::embedded_asset;
+use bevy::core_pipeline::schedule::Core3d;
+use bevy::ecs::prelude::*;
+use bevy::pbr::SsaoPipelineId;
+use bevy::render::{
+    GpuResourceAppExt, Render, RenderApp, RenderSystems,
+    render_resource::{PipelineCache, SpecializedRenderPipelines},
+};
+
+use crate::near_field::NearFieldPipeline;
+use crate::schedule::DynamicAoSystems;
+use crate::view::DynamicAoView;
+
+/// Registers the compose pass, the hand-off to PBR and the debug view.
+pub struct ComposePlugin;
+
+impl Plugin for ComposePlugin {
+    fn build(&self, app: &mut App) {
+        embedded_asset!(app, "compose.wgsl");
+        embedded_asset!(app, "debug_view.wgsl");
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_gpu_resource::<pipeline::ComposePipeline>()
+            .init_gpu_resource::<debug_view::DebugViewPipeline>()
+            .init_gpu_resource::<SpecializedRenderPipelines<debug_view::DebugViewPipeline>>()
+            .add_systems(
+                Render,
+                (
+                    debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
+                    // Bevy inserts `SsaoPipelineId` during `Prepare`; its pass needs it.
+                    disable_bevy_ssao
+                        .after(RenderSystems::Prepare)
+                        .before(RenderSystems::Render),
+                    (
+                        pipeline::prepare_compose_bind_groups,
+                        debug_view::prepare_debug_view_bind_groups,
+                    )
+                        .in_set(RenderSystems::PrepareBindGroups),
+                ),
+            )
+            .add_systems(
+                Core3d,
+                (
+                    node::compose_pass.in_set(DynamicAoSystems::Compose),
+                    node::debug_view_pass.in_set(DynamicAoSystems::Debug),
+                ),
+            );
+    }
+}
+
+/// Bevy's SSAO pass only runs on views that carry its pipeline id; taking it away hands the
+/// texture to us. Until our pipelines have compiled, Bevy's pass keeps running, so the image
+/// never goes without AO or black.
+fn disable_bevy_ssao(
+    mut commands: Commands,
+    pipeline_cache: Res<PipelineCache>,
+    near_field: Res<NearFieldPipeline>,
+    compose: Res<pipeline::ComposePipeline>,
+    views: Query<(Entity, &DynamicAoView), With<SsaoPipelineId>>,
+) {
+    let ready = pipeline_cache
+        .get_compute_pipeline(near_field.pipeline)
+        .is_some()
+        && pipeline_cache
+            .get_compute_pipeline(compose.pipeline)
+            .is_some();
+    if !ready {
+        return;
+    }
+    for (entity, view) in &views {
+        if view.replaces_bevy_ssao() {
+            commands.entity(entity).remove::<SsaoPipelineId>();
+        }
+    }
+}

@@ -1,0 +1,81 @@
+//! The compose pass and the debug view pass.
+
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    camera::ExtractedCamera,
+    diagnostic::RecordDiagnostics,
+    extract_component::DynamicUniformIndex,
+    render_resource::{ComputePassDescriptor, PipelineCache, RenderPassDescriptor},
+    renderer::{RenderContext, ViewQuery},
+    view::ViewTarget,
+};
+
+use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
+use super::pipeline::{ComposeBindGroup, ComposePipeline};
+use crate::view::{DynamicAoUniform, DynamicAoView};
+
+pub(crate) fn compose_pass(
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &DynamicAoView,
+        &ComposeBindGroup,
+        &DynamicUniformIndex<DynamicAoUniform>,
+    )>,
+    pipeline: Res<ComposePipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (camera, ao_view, bind_group, settings_index) = view.into_inner();
+    if !ao_view.replaces_bevy_ssao() {
+        return;
+    }
+    let (Some(size), Some(compute_pipeline)) = (
+        camera.physical_viewport_size,
+        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+    ) else {
+        return;
+    };
+
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_compose");
+    let encoder = ctx.command_encoder();
+    encoder.push_debug_group("dynamic_ao_compose");
+    {
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("dynamic_ao_compose"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(compute_pipeline);
+        pass.set_bind_group(0, &bind_group.0, &[settings_index.index()]);
+        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
+    }
+    encoder.pop_debug_group();
+    time_span.end(ctx.command_encoder());
+}
+
+pub(crate) fn debug_view_pass(
+    view: ViewQuery<(&ViewTarget, &DebugViewPipelineId, &DebugViewBindGroup)>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (target, pipeline_id, bind_group) = view.into_inner();
+    let Some(pipeline) = pipeline_cache.get_render_pipeline(pipeline_id.0) else {
+        return;
+    };
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some("dynamic_ao_debug_view"),
+        color_attachments: &[Some(target.get_unsampled_color_attachment())],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_debug_view");
+    pass.set_render_pipeline(pipeline);
+    pass.set_bind_group(0, &bind_group.0, &[]);
+    pass.draw(0..3, 0..1);
+    pass_span.end(&mut pass);
+}

@@ -1,0 +1,76 @@
+//! Dynamic ambient occlusion for Bevy.
+//!
+//! Add [`DynamicAoPlugin`] to the app and [`DynamicAo`](settings::DynamicAo) to a 3D camera:
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy_dynamic_ao::prelude::*;
+//!
+//! App::new()
+//!     .add_plugins((DefaultPlugins, DynamicAoPlugin))
+//!     .add_systems(Startup, |mut commands: Commands| {
+//!         commands.spawn((Camera3d::default(), DynamicAo::default()));
+//!     })
+//!     .run();
+//! ```
+//!
+//! What runs each frame, per camera (the order lives in [`schedule`]):
+//!
+//! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer; our
+//!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
+//! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4).
+//! 3. [`compose`] turns occlusion into visibility and writes it into the texture Bevy's PBR
+//!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
+//!    environment specular darken; direct lights are untouched.
+//!
+//! [`reference`] evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
+//! the benchmarks and the `ao_capture` example use it.
+
+pub mod compose;
+pub mod nd_buffer;
+pub mod near_field;
+pub mod readback;
+pub mod reference;
+pub mod schedule;
+pub mod settings;
+mod view;
+
+use bevy::app::{App, Plugin};
+use bevy::shader::load_shader_library;
+
+pub use settings::{AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+
+/// Everything a user of the crate usually needs.
+pub mod prelude {
+    pub use crate::DynamicAoPlugin;
+    pub use crate::readback::AoReadback;
+    pub use crate::settings::{AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+}
+
+/// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
+///
+/// Needs Bevy's `bevy_pbr` rendering (it hands its result to the PBR lighting through the
+/// binding Bevy uses for its own screen-space AO) and compute shaders with storage textures.
+pub struct DynamicAoPlugin;
+
+impl Plugin for DynamicAoPlugin {
+    fn build(&self, app: &mut App) {
+        load_shader_library!(app, "shaders/nd_buffer.wgsl");
+        load_shader_library!(app, "shaders/sampling.wgsl");
+        load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
+
+        app.register_type::<DynamicAo>()
+            .register_type::<readback::AoReadback>()
+            .add_plugins((
+                view::ViewPlugin,
+                nd_buffer::NdBufferPlugin,
+                near_field::NearFieldPlugin,
+                compose::ComposePlugin,
+                readback::ReadbackPlugin,
+            ));
+    }
+
+    fn finish(&self, app: &mut App) {
+        schedule::configure(app);
+    }
+}

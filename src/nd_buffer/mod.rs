@@ -1,0 +1,59 @@
+//! The two-layer ND-buffer (normals + depth) of Shanmugam & Arikan 2007, §4.2.
+//!
+//! The front layer is Bevy's own depth and normal prepass. This module draws the second layer:
+//! the nearest back faces, through a mesh phase of our own that reuses Bevy's mesh pipeline, so
+//! skinned and morph-target meshes deform exactly as in the front layer. Both layers use the
+//! same encoding: reverse-Z `Depth32Float` depth and world-space normals stored as `n*0.5+0.5` in
+//! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`.
+
+mod node;
+mod phase;
+mod pipeline;
+
+use bevy::app::{App, Plugin};
+use bevy::asset::embedded_asset;
+use bevy::core_pipeline::schedule::Core3d;
+use bevy::ecs::schedule::IntoScheduleConfigs;
+use bevy::pbr::{MeshPipeline, MeshPipelineSystems};
+use bevy::render::{
+    ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderStartup, RenderSystems,
+    render_phase::{
+        AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system,
+    },
+    render_resource::SpecializedMeshPipelines,
+};
+
+use crate::schedule::DynamicAoSystems;
+pub use phase::BackFace3d;
+
+/// Registers the back-face phase, its pipeline and its pass.
+pub struct NdBufferPlugin;
+
+impl Plugin for NdBufferPlugin {
+    fn build(&self, app: &mut App) {
+        embedded_asset!(app, "back_faces.wgsl");
+        app.add_plugins(SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(
+            RenderDebugFlags::default(),
+        ));
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_resource::<SpecializedMeshPipelines<pipeline::BackFacePipeline>>()
+            .init_resource::<DrawFunctions<BackFace3d>>()
+            .add_render_command::<BackFace3d, phase::DrawBackFaces>()
+            .add_systems(
+                RenderStartup,
+                pipeline::init_back_face_pipeline.after(MeshPipelineSystems),
+            )
+            .add_systems(ExtractSchedule, phase::extract_back_face_phases)
+            .add_systems(
+                Render,
+                (
+                    pipeline::queue_back_faces.in_set(RenderSystems::QueueMeshes),
+                    sort_phase_system::<BackFace3d>.in_set(RenderSystems::PhaseSort),
+                ),
+            )
+            .add_systems(Core3d, node::back_face_pass.in_set(DynamicAoSystems::BackFaces));
+    }
+}

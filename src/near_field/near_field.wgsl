@@ -1,0 +1,92 @@
+// Near-field ambient occlusion in image space: Shanmugam & Arikan 2007, §4, eq. 2–4.
+// `reference::near_field` evaluates the same steps on the CPU; keep the two in step.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
+#import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
+#import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
+
+struct Settings {
+    radius: f32,
+    intensity: f32,
+    max_samples: u32,
+    min_samples: u32,
+    back_layer: u32,
+    near_field: u32,
+}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: Settings;
+@group(0) @binding(2) var front_depth: texture_depth_2d;
+@group(0) @binding(3) var front_normal: texture_2d<f32>;
+@group(0) @binding(4) var back_depth: texture_depth_2d;
+@group(0) @binding(5) var back_normal: texture_2d<f32>;
+@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
+
+const PI: f32 = 3.14159265358979;
+
+// A_ψ of the sphere standing for the surface sample seen at pixel `q` (depth and encoded normal
+// already read), as seen from receiver `p` with normal `n`.
+fn occluder(
+    q: vec2<i32>,
+    depth: f32,
+    encoded_normal: vec3<f32>,
+    size: vec2<f32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    sphere_scale: f32,
+) -> f32 {
+    if depth <= 0.0 {
+        return 0.0;
+    }
+    let position = world_position(view, q, size, depth);
+    // Eq. 4 sums only occluders closer than r_far.
+    if distance(position, p) >= settings.radius {
+        return 0.0;
+    }
+    let radius = pixel_world_size(view, view_depth(view, position), size.y) * sphere_scale;
+    let center = position - decode_normal(encoded_normal) * radius;
+    return sphere_occlusion(center, radius, p, n);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn near_field(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = textureDimensions(front_depth);
+    if id.x >= dims.x || id.y >= dims.y {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let size = vec2<f32>(dims);
+    let depth = textureLoad(front_depth, pixel, 0);
+    let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
+    if depth <= 0.0 || dot(n, n) == 0.0 {
+        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        return;
+    }
+    let p = world_position(view, pixel, size, depth);
+
+    // r_far projected at the receiver, pixels; the sample count follows its area (fig. 4).
+    let radius_px = settings.radius / pixel_world_size(view, view_depth(view, p), size.y);
+    let area = PI * radius_px * radius_px;
+    let count = clamp(u32(ceil(min(area, 4096.0))), settings.min_samples, settings.max_samples);
+    // Each sample stands for area / count pixels; a sphere of that cross-section has a radius
+    // of this many pixel sizes.
+    let sphere_scale = radius_px / sqrt(f32(count));
+    let rotation = pixel_rotation(id.xy);
+
+    var sum = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let offset = disk_sample(i, count, radius_px, rotation);
+        let q = pixel + vec2<i32>(floor(offset + 0.5));
+        if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
+            continue;
+        }
+        sum += occluder(q, textureLoad(front_depth, q, 0), textureLoad(front_normal, q, 0).xyz,
+            size, p, n, sphere_scale);
+        if settings.back_layer != 0u {
+            sum += occluder(q, textureLoad(back_depth, q, 0), textureLoad(back_normal, q, 0).xyz,
+                size, p, n, sphere_scale);
+        }
+    }
+    textureStore(occlusion, pixel, vec4<f32>(clamp(sum * settings.intensity, 0.0, 1.0)));
+}

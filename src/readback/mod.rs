@@ -1,0 +1,88 @@
+//! Copies of a camera's AO buffer and ND-buffer into images the CPU can read back.
+//!
+//! Put [`AoReadback`] on a camera that has [`DynamicAo`](crate::DynamicAo), then read its images
+//! with Bevy's `Readback::texture`. Tests, benchmarks and the `ao_capture` example use it to
+//! compare what the GPU computed with the CPU [`reference`](crate::reference).
+
+mod node;
+
+use bevy::app::{App, Plugin};
+use bevy::asset::{Assets, Handle, RenderAssetUsages, embedded_asset};
+use bevy::core_pipeline::schedule::Core3d;
+use bevy::ecs::prelude::*;
+use bevy::ecs::reflect::ReflectComponent;
+use bevy::image::Image;
+use bevy::math::UVec2;
+use bevy::reflect::Reflect;
+use bevy::render::{
+    GpuResourceAppExt, Render, RenderApp, RenderSystems,
+    extract_component::{ExtractComponent, ExtractComponentPlugin},
+    render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages},
+};
+
+use crate::schedule::DynamicAoSystems;
+
+/// Asks the plugin to copy this camera's AO buffer and both ND-buffer layers every frame.
+///
+/// All three images must have the camera's physical viewport size (pixels); [`AoReadback::new`]
+/// makes them. Where the camera sees no geometry, visibility reads 1.
+#[derive(Component, ExtractComponent, Reflect, Clone, Debug)]
+#[reflect(Component, Clone, Debug)]
+pub struct AoReadback {
+    /// Visibility (1 = open) as Bevy's PBR lighting receives it, `R32Float`.
+    pub visibility: Handle<Image>,
+    /// Front layer: world-space unit normal in `rgb`, reverse-Z depth in `a` (0 = nothing),
+    /// `Rgba32Float`.
+    pub front: Handle<Image>,
+    /// Back-face layer, same layout as `front`. All zero when the back layer is off.
+    pub back: Handle<Image>,
+}
+
+impl AoReadback {
+    /// Makes the three images for a viewport of `size` pixels.
+    pub fn new(images: &mut Assets<Image>, size: UVec2) -> Self {
+        let mut image = |format| {
+            let mut image = Image::new_uninit(
+                Extent3d {
+                    width: size.x.max(1),
+                    height: size.y.max(1),
+                    depth_or_array_layers: 1,
+                },
+                TextureDimension::D2,
+                format,
+                RenderAssetUsages::RENDER_WORLD,
+            );
+            image.texture_descriptor.usage |=
+                TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
+            images.add(image)
+        };
+        Self {
+            visibility: image(TextureFormat::R32Float),
+            front: image(TextureFormat::Rgba32Float),
+            back: image(TextureFormat::Rgba32Float),
+        }
+    }
+}
+
+/// Registers the read-back copy pass.
+pub struct ReadbackPlugin;
+
+impl Plugin for ReadbackPlugin {
+    fn build(&self, app: &mut App) {
+        embedded_asset!(app, "readback.wgsl");
+        app.add_plugins(ExtractComponentPlugin::<AoReadback>::default());
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_gpu_resource::<node::ReadbackPipeline>()
+            .add_systems(
+                Render,
+                node::prepare_readback_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+            )
+            .add_systems(Core3d, node::readback_pass.in_set(DynamicAoSystems::Debug));
+    }
+}

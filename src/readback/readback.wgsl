@@ -1,0 +1,28 @@
+// Copies the AO buffer and both ND-buffer layers into plain float images for the CPU.
+
+#import bevy_dynamic_ao::nd_buffer::decode_normal
+
+@group(0) @binding(0) var visibility: texture_2d<f32>;
+@group(0) @binding(1) var front_depth: texture_depth_2d;
+@group(0) @binding(2) var front_normal: texture_2d<f32>;
+@group(0) @binding(3) var back_depth: texture_depth_2d;
+@group(0) @binding(4) var back_normal: texture_2d<f32>;
+@group(0) @binding(5) var visibility_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(6) var front_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(7) var back_out: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn readback(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = textureDimensions(visibility_out);
+    if id.x >= dims.x || id.y >= dims.y {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let depth = textureLoad(front_depth, pixel, 0);
+    // Where no geometry is, nothing is occluded.
+    let open = select(textureLoad(visibility, pixel, 0).r, 1.0, depth <= 0.0);
+    textureStore(visibility_out, pixel, vec4<f32>(open));
+    textureStore(front_out, pixel, vec4<f32>(decode_normal(textureLoad(front_normal, pixel, 0).xyz), depth));
+    let back = textureLoad(back_depth, pixel, 0);
+    textureStore(back_out, pixel, vec4<f32>(decode_normal(textureLoad(back_normal, pixel, 0).xyz), back));
+}

@@ -1,0 +1,19 @@
+//! CPU reference: the plugin's formulas evaluated on the CPU, a BVH ray tracer for ground
+//! truth, image metrics and 16-bit PNG output. No GPU needed; tests, benchmarks and tools use it.
+//!
+//! - [`nd_buffer`]: an ND-buffer read back from the GPU and the camera that made it.
+//! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
+//! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
+//! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
+//!   binary hits within a distance R, 1 = open (eq. 1 of the papers).
+//! - [`metrics`]: RMSE and mean bias between two AO images.
+//! - [`png16`]: 16-bit grayscale PNG files of visibility.
+
+pub mod bvh;
+pub mod ground_truth;
+pub mod metrics;
+pub mod nd_buffer;
+pub mod near_field;
+pub mod png16;
+pub mod sampling;
+pub mod scene;

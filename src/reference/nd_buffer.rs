@@ -1,0 +1,85 @@
+//! An ND-buffer on the CPU, and the camera that rendered it: the CPU twin of
+//! `shaders/nd_buffer.wgsl`.
+
+use bevy::math::{Mat4, Vec3, Vec4, Vec4Swizzles};
+
+/// One ND-buffer texel: world-space unit normal (zero where nothing was drawn) and reverse-Z
+/// depth (0 where nothing was drawn).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NdTexel {
+    pub normal: Vec3,
+    pub depth: f32,
+}
+
+impl NdTexel {
+    /// From an `Rgba32Float` read-back texel (`AoReadback` layout).
+    pub fn from_rgba(rgba: [f32; 4]) -> Self {
+        Self {
+            normal: Vec3::new(rgba[0], rgba[1], rgba[2]),
+            depth: rgba[3],
+        }
+    }
+}
+
+/// The matrices of a view, as Bevy's view uniform holds them.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewMatrices {
+    pub world_from_clip: Mat4,
+    pub view_from_world: Mat4,
+    pub clip_from_view: Mat4,
+}
+
+impl ViewMatrices {
+    /// From a camera's world transform and projection matrix.
+    pub fn new(world_from_view: Mat4, clip_from_view: Mat4) -> Self {
+        Self {
+            world_from_clip: world_from_view * clip_from_view.inverse(),
+            view_from_world: world_from_view.inverse(),
+            clip_from_view,
+        }
+    }
+
+    /// World position of the centre of pixel (x, y) of a `width`×`height` viewport at
+    /// reverse-Z `depth`.
+    pub fn world_position(&self, x: i32, y: i32, width: u32, height: u32, depth: f32) -> Vec3 {
+        let u = (x as f32 + 0.5) / width as f32;
+        let v = (y as f32 + 0.5) / height as f32;
+        let world = self.world_from_clip * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
+        world.xyz() / world.w
+    }
+
+    /// Distance in front of the camera along its view axis (metres).
+    pub fn view_depth(&self, world_position: Vec3) -> f32 {
+        -(self.view_from_world * world_position.extend(1.0)).z
+    }
+
+    /// World-space height of one pixel at view depth `depth` (metres).
+    pub fn pixel_world_size(&self, depth: f32, height: u32) -> f32 {
+        let p11 = self.clip_from_view.y_axis.y;
+        if self.clip_from_view.w_axis.w == 1.0 {
+            2.0 / (p11 * height as f32)
+        } else {
+            2.0 * depth / (p11 * height as f32)
+        }
+    }
+}
+
+/// Both layers of an ND-buffer, row-major, top row first.
+#[derive(Clone, Debug)]
+pub struct NdBuffer {
+    pub width: u32,
+    pub height: u32,
+    pub front: Vec<NdTexel>,
+    pub back: Vec<NdTexel>,
+}
+
+impl NdBuffer {
+    /// The texel of a layer at (x, y); `None` outside the image.
+    pub fn texel(&self, back: bool, x: i32, y: i32) -> Option<NdTexel> {
+        if x < 0 || y < 0 || x >= self.width as i32 || y >= self.height as i32 {
+            return None;
+        }
+        let layer = if back { &self.back } else { &self.front };
+        layer.get(y as usize * self.width as usize + x as usize).copied()
+    }
+}

@@ -1,0 +1,280 @@
+//! The camera component and its quality presets.
+
+use bevy::ecs::component::Component;
+use bevy::ecs::reflect::ReflectComponent;
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::reflect::{Reflect, std_traits::ReflectDefault};
+
+/// Default world-space AO radius r_far, in metres.
+pub const DEFAULT_RADIUS: f32 = 0.75;
+/// Default multiplier applied to the summed occlusion (no unit).
+pub const DEFAULT_INTENSITY: f32 = 1.0;
+
+/// Dynamic ambient occlusion for a 3D camera.
+///
+/// Put it on a `Camera3d`. It brings Bevy's depth and normal prepasses (through
+/// [`ScreenSpaceAmbientOcclusion`], whose output texture is where the result goes, so Bevy's PBR
+/// lighting applies it to ambient and indirect light only). Bevy's own SSAO pass is switched off
+/// on that camera unless [`AoTechnique::BevySsao`] is chosen.
+///
+/// The camera must use `Msaa::Off`; on an MSAA camera the plugin logs a warning and renders
+/// without AO.
+#[derive(Component, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Component, Default, Clone, Debug, PartialEq)]
+#[require(ScreenSpaceAmbientOcclusion)]
+pub struct DynamicAo {
+    /// Which technique computes the occlusion. Default: [`AoTechnique::NearField`].
+    pub technique: AoTechnique,
+    /// Sample budget of the near-field pass. Default: [`AoQuality::High`].
+    pub quality: AoQuality,
+    /// r_far of Shanmugam & Arikan eq. 4: occluders farther than this from the receiver are
+    /// ignored, and the sampling disk is this radius projected on screen.
+    /// Units: metres (world units). Valid: > 0. Default: [`DEFAULT_RADIUS`].
+    pub radius: f32,
+    /// Multiplier on the summed occlusion before clamping to [0, 1]. No unit.
+    /// Valid: ≥ 0. Default: [`DEFAULT_INTENSITY`] (the formula as published).
+    pub intensity: f32,
+    /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
+    /// Default: `false`.
+    pub debug_view: bool,
+}
+
+impl Default for DynamicAo {
+    fn default() -> Self {
+        Self {
+            technique: AoTechnique::default(),
+            quality: AoQuality::default(),
+            radius: DEFAULT_RADIUS,
+            intensity: DEFAULT_INTENSITY,
+            debug_view: false,
+        }
+    }
+}
+
+impl DynamicAo {
+    /// The same settings with another technique.
+    pub fn with_technique(mut self, technique: AoTechnique) -> Self {
+        self.technique = technique;
+        self
+    }
+
+    /// The same settings with another quality preset.
+    pub fn with_quality(mut self, quality: AoQuality) -> Self {
+        self.quality = quality;
+        self
+    }
+
+    /// The same settings with another radius (metres).
+    pub fn with_radius(mut self, radius: f32) -> Self {
+        self.radius = radius;
+        self
+    }
+
+    /// The radius actually used: non-finite or non-positive values fall back to the default.
+    pub fn effective_radius(&self) -> f32 {
+        if self.radius.is_finite() && self.radius > 0.0 {
+            self.radius
+        } else {
+            DEFAULT_RADIUS
+        }
+    }
+
+    /// The intensity actually used: non-finite or negative values fall back to the default.
+    pub fn effective_intensity(&self) -> f32 {
+        if self.intensity.is_finite() && self.intensity >= 0.0 {
+            self.intensity
+        } else {
+            DEFAULT_INTENSITY
+        }
+    }
+}
+
+/// The technique that computes a camera's ambient occlusion.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[reflect(Default, Clone, Debug, PartialEq, Hash)]
+pub enum AoTechnique {
+    /// No occlusion: visibility is 1 everywhere.
+    Off,
+    /// Image-space near-field AO from the two-layer ND-buffer (Shanmugam & Arikan 2007, §4).
+    #[default]
+    NearField,
+    /// Bevy's built-in SSAO, left running unchanged (for comparison).
+    BevySsao,
+}
+
+impl AoTechnique {
+    /// Every technique with the name `ao_capture --technique` takes for it.
+    pub const ALL: [(&'static str, AoTechnique); 3] = [
+        ("none", AoTechnique::Off),
+        ("near-field", AoTechnique::NearField),
+        ("bevy-ssao", AoTechnique::BevySsao),
+    ];
+
+    /// The technique with this command-line name, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    }
+
+    /// The command-line name of this technique.
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(_, t)| *t == self).map(|(n, _)| *n).unwrap_or("none")
+    }
+}
+
+/// Named parameter sets for the near-field pass, plus a custom form.
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub enum AoQuality {
+    /// At most 8 samples per pixel and layer.
+    Low,
+    /// At most 16 samples per pixel and layer.
+    Medium,
+    /// At most 32 samples per pixel and layer.
+    #[default]
+    High,
+    /// At most 64 samples per pixel and layer.
+    Ultra,
+    /// Explicit parameters.
+    Custom(NearFieldParams),
+}
+
+impl AoQuality {
+    /// The presets in increasing cost.
+    pub const PRESETS: [AoQuality; 4] = [
+        AoQuality::Low,
+        AoQuality::Medium,
+        AoQuality::High,
+        AoQuality::Ultra,
+    ];
+
+    /// The near-field parameters this preset stands for.
+    pub fn params(&self) -> NearFieldParams {
+        let max_samples = match self {
+            AoQuality::Low => 8,
+            AoQuality::Medium => 16,
+            AoQuality::High => 32,
+            AoQuality::Ultra => 64,
+            AoQuality::Custom(params) => return params.sanitized(),
+        };
+        NearFieldParams {
+            max_samples,
+            ..NearFieldParams::default()
+        }
+    }
+
+    /// Lower-case name (`low`, `medium`, `high`, `ultra`, `custom`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AoQuality::Low => "low",
+            AoQuality::Medium => "medium",
+            AoQuality::High => "high",
+            AoQuality::Ultra => "ultra",
+            AoQuality::Custom(_) => "custom",
+        }
+    }
+
+    /// The preset with this lower-case name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::PRESETS.into_iter().find(|q| q.name() == name)
+    }
+}
+
+/// Parameters of the near-field pass (Shanmugam & Arikan 2007, §4.2).
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub struct NearFieldParams {
+    /// Most neighbouring pixels gathered per receiver and layer. The count actually used
+    /// scales with the projected r_far: one per pixel inside the projected disk at most
+    /// (S&A fig. 4). Valid: 1..=256. Default: 32 (the `High` preset).
+    pub max_samples: u32,
+    /// Fewest neighbouring pixels gathered per receiver and layer, however small r_far
+    /// projects. Valid: 1..=max_samples. Default: 4.
+    pub min_samples: u32,
+    /// Also gather occluders from the back-face layer (S&A §4.2: "the first two layers").
+    /// Default: `true`.
+    pub back_layer: bool,
+}
+
+impl Default for NearFieldParams {
+    fn default() -> Self {
+        Self {
+            max_samples: 32,
+            min_samples: 4,
+            back_layer: true,
+        }
+    }
+}
+
+impl NearFieldParams {
+    /// Most samples a custom parameter set may ask for.
+    pub const MAX_SAMPLES: u32 = 256;
+
+    /// The same parameters clamped into their valid ranges.
+    pub fn sanitized(&self) -> Self {
+        let max_samples = self.max_samples.clamp(1, Self::MAX_SAMPLES);
+        Self {
+            max_samples,
+            min_samples: self.min_samples.clamp(1, max_samples),
+            back_layer: self.back_layer,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_match_the_documentation() {
+        let ao = DynamicAo::default();
+        assert_eq!(ao.radius, DEFAULT_RADIUS);
+        assert_eq!(ao.intensity, DEFAULT_INTENSITY);
+        assert_eq!(ao.technique, AoTechnique::NearField);
+        assert_eq!(ao.quality, AoQuality::High);
+        assert_eq!(AoQuality::High.params(), NearFieldParams::default());
+        assert!(!ao.debug_view);
+    }
+
+    #[test]
+    fn presets_grow_in_cost() {
+        let samples: Vec<u32> = AoQuality::PRESETS
+            .iter()
+            .map(|q| q.params().max_samples)
+            .collect();
+        assert!(samples.windows(2).all(|w| w[0] < w[1]), "{samples:?}");
+    }
+
+    #[test]
+    fn bad_values_fall_back() {
+        let ao = DynamicAo {
+            radius: f32::NAN,
+            intensity: -1.0,
+            ..default()
+        };
+        assert_eq!(ao.effective_radius(), DEFAULT_RADIUS);
+        assert_eq!(ao.effective_intensity(), DEFAULT_INTENSITY);
+        let p = AoQuality::Custom(NearFieldParams {
+            max_samples: 0,
+            min_samples: 99,
+            back_layer: false,
+        })
+        .params();
+        assert_eq!((p.max_samples, p.min_samples), (1, 1));
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for (name, t) in AoTechnique::ALL {
+            assert_eq!(AoTechnique::from_name(name), Some(t));
+            assert_eq!(t.name(), name);
+        }
+        for q in AoQuality::PRESETS {
+            assert_eq!(AoQuality::from_name(q.name()), Some(q));
+        }
+        assert_eq!(AoTechnique::from_name("nope"), None);
+    }
+
+    fn default<T: Default>() -> T {
+        T::default()
+    }
+}

@@ -1,0 +1,230 @@
+//! Per-camera state: main-world checks, extraction into the render world, per-view textures.
+
+use bevy::app::{App, Plugin, PostUpdate};
+use bevy::camera::{Camera, Camera3d};
+use bevy::ecs::prelude::*;
+use bevy::image::ToExtents;
+use bevy::log::warn;
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::platform::collections::HashSet;
+use bevy::render::{
+    Extract, ExtractSchedule, Render, RenderApp, RenderSystems,
+    camera::ExtractedCamera,
+    extract_component::UniformComponentPlugin,
+    render_resource::{
+        ShaderType, TextureDescriptor, TextureDimension, TextureFormat, TextureUsages,
+    },
+    renderer::RenderDevice,
+    sync_world::RenderEntity,
+    texture::{CachedTexture, TextureCache},
+    view::Msaa,
+};
+
+use crate::settings::{AoTechnique, DynamicAo};
+
+/// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.
+pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
+/// Format of the back-face depth layer: the same as Bevy's prepass depth.
+pub(crate) const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
+/// Format of the intermediate occlusion buffers (always usable as a storage texture).
+pub(crate) const OCCLUSION_FORMAT: TextureFormat = TextureFormat::R32Float;
+
+pub(crate) struct ViewPlugin;
+
+impl Plugin for ViewPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(PostUpdate, check_cameras)
+            .add_plugins(UniformComponentPlugin::<DynamicAoUniform>::default());
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .add_systems(ExtractSchedule, extract_views)
+            .add_systems(
+                Render,
+                prepare_view_textures.in_set(RenderSystems::PrepareResources),
+            );
+    }
+}
+
+/// Why a camera with [`DynamicAo`] renders without it.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+enum Unsupported {
+    Msaa,
+    EmptyViewport,
+}
+
+/// Cameras the plugin cannot serve lose Bevy's SSAO component (whose pass would fail on them)
+/// and get one warning; they get it back once the problem is gone.
+fn check_cameras(
+    mut commands: Commands,
+    cameras: Query<(
+        Entity,
+        &Camera,
+        &Msaa,
+        Has<ScreenSpaceAmbientOcclusion>,
+        Option<&Name>,
+    ), With<DynamicAo>>,
+    mut warned: Local<HashSet<(Entity, Unsupported)>>,
+) {
+    for (entity, camera, msaa, has_ssao, name) in &cameras {
+        let problem = if *msaa != Msaa::Off {
+            Some(Unsupported::Msaa)
+        } else if camera
+            .physical_viewport_size()
+            .is_some_and(|size| size.x == 0 || size.y == 0)
+        {
+            Some(Unsupported::EmptyViewport)
+        } else {
+            None
+        };
+        let label = name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
+        match problem {
+            Some(problem) => {
+                if warned.insert((entity, problem)) {
+                    match problem {
+                        Unsupported::Msaa => warn!(
+                            "DynamicAo on camera {label} needs Msaa::Off (it is {msaa:?}); \
+                             rendering this camera without ambient occlusion"
+                        ),
+                        Unsupported::EmptyViewport => warn!(
+                            "DynamicAo on camera {label}: the viewport has zero size; \
+                             skipping ambient occlusion until it has pixels"
+                        ),
+                    }
+                }
+                if has_ssao {
+                    commands
+                        .entity(entity)
+                        .remove::<ScreenSpaceAmbientOcclusion>();
+                }
+            }
+            None => {
+                warned.retain(|(e, _)| *e != entity);
+                if !has_ssao {
+                    commands
+                        .entity(entity)
+                        .insert(ScreenSpaceAmbientOcclusion::default());
+                }
+            }
+        }
+    }
+}
+
+/// Render-world settings of a view that runs the plugin.
+#[derive(Component, Clone, Debug)]
+pub(crate) struct DynamicAoView {
+    pub technique: AoTechnique,
+    pub back_layer: bool,
+    pub debug_view: bool,
+}
+
+impl DynamicAoView {
+    /// Whether our passes replace Bevy's SSAO on this view.
+    pub fn replaces_bevy_ssao(&self) -> bool {
+        self.technique != AoTechnique::BevySsao
+    }
+}
+
+/// The uniform every pass of a view reads.
+#[derive(Component, ShaderType, Clone, Copy, Debug, Default)]
+pub(crate) struct DynamicAoUniform {
+    /// r_far, metres.
+    pub radius: f32,
+    pub intensity: f32,
+    pub max_samples: u32,
+    pub min_samples: u32,
+    /// 1 when the back-face layer takes part.
+    pub back_layer: u32,
+    /// 1 when the near-field term is on.
+    pub near_field: u32,
+}
+
+fn extract_views(
+    mut commands: Commands,
+    cameras: Extract<
+        Query<(
+            RenderEntity,
+            &Camera,
+            &DynamicAo,
+            &Msaa,
+            Has<ScreenSpaceAmbientOcclusion>,
+        ), With<Camera3d>>,
+    >,
+) {
+    for (entity, camera, ao, msaa, has_ssao) in &cameras {
+        let mut entity_commands = commands.entity(entity);
+        if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
+            entity_commands.remove::<(DynamicAoView, DynamicAoUniform)>();
+            continue;
+        }
+        let params = ao.quality.params();
+        let near_field = ao.technique == AoTechnique::NearField;
+        entity_commands.insert((
+            DynamicAoView {
+                technique: ao.technique,
+                back_layer: near_field && params.back_layer,
+                debug_view: ao.debug_view,
+            },
+            DynamicAoUniform {
+                radius: ao.effective_radius(),
+                intensity: ao.effective_intensity(),
+                max_samples: params.max_samples,
+                min_samples: params.min_samples,
+                back_layer: u32::from(params.back_layer),
+                near_field: u32::from(near_field),
+            },
+        ));
+    }
+}
+
+/// Per-view textures of the plugin, from Bevy's texture cache.
+#[derive(Component)]
+pub(crate) struct DynamicAoTextures {
+    pub back_depth: CachedTexture,
+    pub back_normal: CachedTexture,
+    pub near_occlusion: CachedTexture,
+}
+
+fn prepare_view_textures(
+    mut commands: Commands,
+    mut texture_cache: ResMut<TextureCache>,
+    render_device: Res<RenderDevice>,
+    views: Query<(Entity, &ExtractedCamera), With<DynamicAoView>>,
+) {
+    for (entity, camera) in &views {
+        let Some(size) = camera
+            .physical_viewport_size
+            .filter(|size| size.x > 0 && size.y > 0)
+        else {
+            commands.entity(entity).remove::<DynamicAoTextures>();
+            continue;
+        };
+        let size = size.to_extents();
+        let mut texture = |label, format, usage| {
+            texture_cache.get(
+                &render_device,
+                TextureDescriptor {
+                    label: Some(label),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                },
+            )
+        };
+        let attachment = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
+        commands.entity(entity).insert(DynamicAoTextures {
+            back_depth: texture("dynamic_ao_back_depth", DEPTH_FORMAT, attachment),
+            back_normal: texture("dynamic_ao_back_normal", NORMAL_FORMAT, attachment),
+            near_occlusion: texture(
+                "dynamic_ao_near_occlusion",
+                OCCLUSION_FORMAT,
+                TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
+            ),
+        });
+    }
+}

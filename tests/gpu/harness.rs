@@ -1,0 +1,261 @@
+//! The one headless app every GPU test uses: build a scene, render a few frames on whatever
+//! adapter wgpu finds (lavapipe on CI), read the AO buffer, the ND-buffer and the lit image back.
+
+use std::sync::{Arc, Mutex};
+
+use bevy::app::PluginsState;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::prelude::*;
+use bevy::render::{
+    gpu_readback::{Readback, ReadbackComplete},
+    render_resource::TextureFormat,
+    view::screenshot::{Screenshot, ScreenshotCaptured},
+};
+use bevy::camera::RenderTarget;
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::{
+    bvh::Bvh,
+    ground_truth::{GroundTruthSettings, ground_truth_visibility},
+    nd_buffer::{NdBuffer, NdTexel, ViewMatrices},
+    scene::TriangleScene,
+};
+
+use crate::common;
+
+/// Image size of every GPU test (pixels): small, so lavapipe stays quick.
+pub const WIDTH: u32 = 160;
+pub const HEIGHT: u32 = 120;
+
+/// A scene: meshes with their placement, a camera, and the lights.
+#[derive(Clone)]
+pub struct SceneSpec {
+    pub meshes: Vec<(Mesh, Transform)>,
+    pub camera: Transform,
+    /// Brightness of the camera's ambient light (Bevy's units).
+    pub ambient: f32,
+    /// Illuminance of a directional light shining along this transform's forward, if any.
+    pub sun: Option<(Transform, f32)>,
+}
+
+impl SceneSpec {
+    pub fn new(camera: Transform) -> Self {
+        Self { meshes: Vec::new(), camera, ambient: 500.0, sun: None }
+    }
+
+    pub fn with(mut self, mesh: impl Into<Mesh>, transform: Transform) -> Self {
+        self.meshes.push((mesh.into(), transform));
+        self
+    }
+
+    /// The same triangles for the CPU ray tracer.
+    pub fn bvh(&self) -> Bvh {
+        let mut scene = TriangleScene::default();
+        for (mesh, transform) in &self.meshes {
+            scene.add_mesh(mesh, transform.compute_affine());
+        }
+        Bvh::new(scene.triangles)
+    }
+}
+
+/// What one frame gave back.
+pub struct Frame {
+    pub visibility: Vec<f32>,
+    pub nd: NdBuffer,
+    pub view: ViewMatrices,
+}
+
+impl Frame {
+    /// Pixels where the front layer saw geometry.
+    pub fn geometry_mask(&self) -> Vec<bool> {
+        self.nd.front.iter().map(|t| t.depth > 0.0).collect()
+    }
+
+    /// World position of the front-layer surface at pixel `i` (None where empty).
+    pub fn position(&self, i: usize) -> Option<Vec3> {
+        let t = self.nd.front[i];
+        (t.depth > 0.0).then(|| {
+            self.view.world_position(
+                (i % WIDTH as usize) as i32,
+                (i / WIDTH as usize) as i32,
+                WIDTH,
+                HEIGHT,
+                t.depth,
+            )
+        })
+    }
+
+    /// Ground-truth visibility of the same camera over `bvh`.
+    pub fn ground_truth(&self, bvh: &Bvh, radius: f32) -> Vec<f32> {
+        ground_truth_visibility(
+            bvh,
+            &self.view,
+            &GroundTruthSettings { width: WIDTH, height: HEIGHT, radius, rays_per_pixel: 256 },
+        )
+    }
+}
+
+/// Bevy apps take turns: one renders at a time, so the tests do not fight over two cores.
+pub static GPU_TURN: Mutex<()> = Mutex::new(());
+
+pub struct Gpu {
+    pub app: App,
+    _turn: std::sync::MutexGuard<'static, ()>,
+    pub camera: Entity,
+    readback: AoReadback,
+    target: Handle<Image>,
+}
+
+impl Gpu {
+    /// A headless app showing `scene` through a camera with `ao`.
+    pub fn new(scene: &SceneSpec, ao: DynamicAo) -> Self {
+        let turn = GPU_TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut app = App::new();
+        app.add_plugins((common::headless_plugins(), DynamicAoPlugin));
+        while app.plugins_state() == PluginsState::Adding {
+            bevy::tasks::tick_global_task_pools_on_main_thread();
+        }
+        app.finish();
+        app.cleanup();
+
+        let world = app.world_mut();
+        let target = world.resource_mut::<Assets<Image>>().add(Image::new_target_texture(
+            WIDTH,
+            HEIGHT,
+            TextureFormat::Rgba8UnormSrgb,
+            None,
+        ));
+        let readback = AoReadback::new(&mut world.resource_mut::<Assets<Image>>(), UVec2::new(WIDTH, HEIGHT));
+        let material = world.resource_mut::<Assets<StandardMaterial>>().add(StandardMaterial {
+            base_color: Color::srgb(0.8, 0.8, 0.8),
+            perceptual_roughness: 1.0,
+            reflectance: 0.0,
+            ..default()
+        });
+        for (mesh, transform) in &scene.meshes {
+            let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh.clone());
+            world.spawn((Mesh3d(mesh), MeshMaterial3d(material.clone()), *transform));
+        }
+        if let Some((transform, illuminance)) = scene.sun {
+            world.spawn((DirectionalLight { illuminance, shadow_maps_enabled: false, ..default() }, transform));
+        }
+        let camera = world
+            .spawn((
+                Camera3d::default(),
+                scene.camera,
+                Msaa::Off,
+                Tonemapping::None,
+                RenderTarget::Image(target.clone().into()),
+                AmbientLight { brightness: scene.ambient, ..default() },
+                ao,
+                readback.clone(),
+            ))
+            .id();
+        Self { app, _turn: turn, camera, readback, target }
+    }
+
+    /// Changes the camera's settings.
+    pub fn set_ao(&mut self, change: impl FnOnce(&mut DynamicAo)) {
+        let mut ao = self.app.world_mut().get_mut::<DynamicAo>(self.camera).expect("camera has DynamicAo");
+        change(&mut ao);
+    }
+
+    pub fn update(&mut self, frames: u32) {
+        for _ in 0..frames {
+            self.app.update();
+        }
+    }
+
+    /// Renders `frames` frames, then reads the AO buffer and both ND-buffer layers back.
+    pub fn frame(&mut self, frames: u32) -> Frame {
+        self.update(frames);
+        let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
+        let images = [&self.readback.visibility, &self.readback.front, &self.readback.back];
+        let entities: Vec<Entity> = images
+            .iter()
+            .enumerate()
+            .map(|(slot, image)| {
+                let slots = slots.clone();
+                self.app
+                    .world_mut()
+                    .spawn(Readback::texture((*image).clone()))
+                    .observe(move |done: On<ReadbackComplete>| {
+                        slots.lock().unwrap()[slot].get_or_insert_with(|| done.data.clone());
+                    })
+                    .id()
+            })
+            .collect();
+        for _ in 0..60 {
+            self.app.update();
+            if slots.lock().unwrap().iter().all(Option::is_some) {
+                break;
+            }
+        }
+        for entity in entities {
+            self.app.world_mut().despawn(entity);
+        }
+        let slots = slots.lock().unwrap().clone();
+        let [Some(visibility), Some(front), Some(back)] = slots else {
+            panic!("the GPU read-back did not complete in 60 frames");
+        };
+        let (w, h) = (WIDTH as usize, HEIGHT as usize);
+        let texels = |data: &[u8]| -> Vec<NdTexel> {
+            common::unpad_f32(data, w, h, 4)
+                .chunks_exact(4)
+                .map(|c| NdTexel::from_rgba([c[0], c[1], c[2], c[3]]))
+                .collect()
+        };
+        Frame {
+            visibility: common::unpad_f32(&visibility, w, h, 1),
+            nd: NdBuffer { width: WIDTH, height: HEIGHT, front: texels(&front), back: texels(&back) },
+            view: self.view(),
+        }
+    }
+
+    /// The camera's matrices, as its view uniform holds them.
+    pub fn view(&mut self) -> ViewMatrices {
+        let world = self.app.world_mut();
+        let camera = world.get::<Camera>(self.camera).expect("camera");
+        let transform = world.get::<GlobalTransform>(self.camera).expect("camera transform");
+        ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
+    }
+
+    /// The lit image after `frames` more frames, as linear RGB.
+    pub fn color(&mut self, frames: u32) -> Vec<Vec3> {
+        self.update(frames);
+        let slot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
+        let store = slot.clone();
+        self.app
+            .world_mut()
+            .spawn(Screenshot::image(self.target.clone()))
+            .observe(move |shot: On<ScreenshotCaptured>| {
+                *store.lock().unwrap() = shot.image.data.clone();
+            });
+        for _ in 0..60 {
+            self.app.update();
+            if slot.lock().unwrap().is_some() {
+                break;
+            }
+        }
+        let data = slot.lock().unwrap().take().expect("the screenshot did not arrive in 60 frames");
+        data.chunks_exact(4)
+            .take((WIDTH * HEIGHT) as usize)
+            .map(|p| {
+                Vec3::new(
+                    srgb_to_linear(p[0]),
+                    srgb_to_linear(p[1]),
+                    srgb_to_linear(p[2]),
+                )
+            })
+            .collect()
+    }
+}
+
+fn srgb_to_linear(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Index of pixel (x, y).
+pub fn index(x: u32, y: u32) -> usize {
+    (y * WIDTH + x) as usize
+}

@@ -1,0 +1,16 @@
+//! GPU tests: whole headless apps render small scenes (on lavapipe where no GPU exists) and
+//! compare what the plugin computed with the CPU reference and with ray-traced ground truth.
+//! One test binary on purpose: every binary links all of Bevy.
+
+#[path = "../../examples/common/mod.rs"]
+mod common;
+#[path = "../../examples/common/gltf_scene.rs"]
+mod gltf_scene;
+
+mod ao_capture;
+mod back_layer;
+mod bad_input;
+mod harness;
+mod lighting;
+mod near_field;
+mod scenes;
