@@ -54,26 +54,46 @@ enum Unsupported {
     EmptyViewport,
 }
 
+/// Marks a camera the plugin switched off because its viewport had no pixels: Bevy's renderer
+/// rejects zero-size views (a validation error that stops the app), so the camera waits,
+/// inactive, until its viewport has pixels again.
+#[derive(Component)]
+pub(crate) struct SuspendedForEmptyViewport;
+
 /// Cameras the plugin cannot serve lose Bevy's SSAO component (whose pass would fail on them)
 /// and get one warning; they get it back once the problem is gone.
 fn check_cameras(
     mut commands: Commands,
-    cameras: Query<(
-        Entity,
-        &Camera,
-        &Msaa,
-        Has<ScreenSpaceAmbientOcclusion>,
-        Option<&Name>,
-    ), With<DynamicAo>>,
+    mut cameras: Query<
+        (
+            Entity,
+            &mut Camera,
+            &Msaa,
+            Has<ScreenSpaceAmbientOcclusion>,
+            Has<SuspendedForEmptyViewport>,
+            Option<&Name>,
+        ),
+        With<DynamicAo>,
+    >,
     mut warned: Local<HashSet<(Entity, Unsupported)>>,
 ) {
-    for (entity, camera, msaa, has_ssao, name) in &cameras {
+    for (entity, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
+        let empty_viewport = camera
+            .viewport
+            .as_ref()
+            .is_some_and(|v| v.physical_size.x == 0 || v.physical_size.y == 0);
+        if empty_viewport && camera.is_active {
+            camera.is_active = false;
+            commands.entity(entity).insert(SuspendedForEmptyViewport);
+        } else if !empty_viewport && suspended {
+            camera.is_active = true;
+            commands
+                .entity(entity)
+                .remove::<SuspendedForEmptyViewport>();
+        }
         let problem = if *msaa != Msaa::Off {
             Some(Unsupported::Msaa)
-        } else if camera
-            .physical_viewport_size()
-            .is_some_and(|size| size.x == 0 || size.y == 0)
-        {
+        } else if empty_viewport {
             Some(Unsupported::EmptyViewport)
         } else {
             None
@@ -88,8 +108,9 @@ fn check_cameras(
                              rendering this camera without ambient occlusion"
                         ),
                         Unsupported::EmptyViewport => warn!(
-                            "DynamicAo on camera {label}: the viewport has zero size; \
-                             skipping ambient occlusion until it has pixels"
+                            "camera {label} has a zero-size viewport, which Bevy's renderer \
+                             rejects; DynamicAo deactivates the camera until the viewport has \
+                             pixels"
                         ),
                     }
                 }
@@ -143,13 +164,16 @@ pub(crate) struct DynamicAoUniform {
 fn extract_views(
     mut commands: Commands,
     cameras: Extract<
-        Query<(
-            RenderEntity,
-            &Camera,
-            &DynamicAo,
-            &Msaa,
-            Has<ScreenSpaceAmbientOcclusion>,
-        ), With<Camera3d>>,
+        Query<
+            (
+                RenderEntity,
+                &Camera,
+                &DynamicAo,
+                &Msaa,
+                Has<ScreenSpaceAmbientOcclusion>,
+            ),
+            With<Camera3d>,
+        >,
     >,
 ) {
     for (entity, camera, ao, msaa, has_ssao) in &cameras {

@@ -44,7 +44,11 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let folder = options.scene.parent().map(PathBuf::from).unwrap_or_default();
+    let folder = options
+        .scene
+        .parent()
+        .map(PathBuf::from)
+        .unwrap_or_default();
     let file = options
         .scene
         .file_name()
@@ -176,7 +180,9 @@ fn scene_ready(
         let graph = graphs.add(graph);
         let time = capture.options.time;
         for player in &players {
-            commands.entity(player).insert(AnimationGraphHandle(graph.clone()));
+            commands
+                .entity(player)
+                .insert(AnimationGraphHandle(graph.clone()));
             commands.queue(move |world: &mut World| {
                 if let Some(mut player) = world.get_mut::<AnimationPlayer>(player) {
                     player.play(node).seek_to(time).pause();
@@ -203,10 +209,16 @@ fn drive(
     match capture.stage {
         Stage::Loading => {
             if let Some(LoadState::Failed(err)) = assets.get_load_state(&capture.scene) {
-                eprintln!("ao_capture: cannot load {}: {err}", capture.options.scene.display());
+                eprintln!(
+                    "ao_capture: cannot load {}: {err}",
+                    capture.options.scene.display()
+                );
                 exit.write(AppExit::error());
             } else if capture.frames > LOAD_TIMEOUT_FRAMES {
-                eprintln!("ao_capture: {} did not load in time", capture.options.scene.display());
+                eprintln!(
+                    "ao_capture: {} did not load in time",
+                    capture.options.scene.display()
+                );
                 exit.write(AppExit::error());
             }
         }
@@ -227,7 +239,10 @@ fn drive(
                 if let Err(err) =
                     write_visibility_png(&options.out_ao, options.width, options.height, visibility)
                 {
-                    eprintln!("ao_capture: cannot write {}: {err}", options.out_ao.display());
+                    eprintln!(
+                        "ao_capture: cannot write {}: {err}",
+                        options.out_ao.display()
+                    );
                     exit.write(AppExit::error());
                     return;
                 }
@@ -257,7 +272,10 @@ fn store_visibility(
     if capture.visibility.is_some() {
         return;
     }
-    let (w, h) = (capture.options.width as usize, capture.options.height as usize);
+    let (w, h) = (
+        capture.options.width as usize,
+        capture.options.height as usize,
+    );
     capture.visibility = Some(common::unpad_f32(&readback.data, w, h, 1));
     commands.entity(readback.entity).despawn();
     // The lit image is captured once the AO is, from the same frame onwards.
@@ -265,18 +283,22 @@ fn store_visibility(
         if let Some(RenderTarget::Image(target)) = cameras.iter().next() {
             commands
                 .spawn(Screenshot::image(target.handle.clone()))
-                .observe(move |shot: On<ScreenshotCaptured>, mut capture: ResMut<Capture>| {
-                    match shot.image.clone().try_into_dynamic() {
-                        Ok(image) => {
-                            if let Err(err) = image.to_rgba8().save(&out) {
-                                capture.failure =
-                                    Some(format!("cannot write {}: {err}", out.display()));
+                .observe(
+                    move |shot: On<ScreenshotCaptured>, mut capture: ResMut<Capture>| {
+                        match shot.image.clone().try_into_dynamic() {
+                            Ok(image) => {
+                                if let Err(err) = image.to_rgba8().save(&out) {
+                                    capture.failure =
+                                        Some(format!("cannot write {}: {err}", out.display()));
+                                }
+                            }
+                            Err(err) => {
+                                capture.failure = Some(format!("cannot convert the image: {err}"))
                             }
                         }
-                        Err(err) => capture.failure = Some(format!("cannot convert the image: {err}")),
-                    }
-                    capture.color_done = true;
-                });
+                        capture.color_done = true;
+                    },
+                );
         }
     }
 }

@@ -32,7 +32,8 @@ pub struct Options {
 impl Options {
     /// `Ok(None)`: a listing or help was printed, nothing to render.
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
-        let (mut scene, mut width, mut height, mut radius, mut technique) = (None, None, None, None, None);
+        let (mut scene, mut width, mut height, mut radius, mut technique) =
+            (None, None, None, None, None);
         let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
@@ -78,7 +79,9 @@ impl Options {
                         .parse::<f32>()
                         .ok()
                         .filter(|t| t.is_finite() && *t >= 0.0)
-                        .ok_or(format!("--time takes a number of seconds ≥ 0, got '{text}'"))?;
+                        .ok_or(format!(
+                            "--time takes a number of seconds ≥ 0, got '{text}'"
+                        ))?;
                 }
                 "--out-ao" => out_ao = Some(PathBuf::from(value()?)),
                 "--out-color" => out_color = Some(PathBuf::from(value()?)),
@@ -95,7 +98,8 @@ impl Options {
             return Err(format!("scene file {} not found", scene.display()));
         }
         // Bevy's asset server wants an absolute folder to load from.
-        let scene = std::fs::canonicalize(&scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+        let scene =
+            std::fs::canonicalize(&scene).map_err(|e| format!("{}: {e}", scene.display()))?;
         Ok(Some(Options {
             scene,
             width: width.ok_or_else(|| missing("--width"))?,

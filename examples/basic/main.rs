@@ -11,7 +11,8 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
 
-const USAGE: &str = "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
+const USAGE: &str =
+    "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
 keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer, Esc quit";
 
 fn main() {

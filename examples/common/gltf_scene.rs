@@ -16,7 +16,11 @@ pub struct MeshData {
 /// An axis-aligned box of the given size centred on the origin, one quad per face.
 pub fn box_mesh(size: Vec3) -> MeshData {
     let h = size / 2.0;
-    let mut mesh = MeshData { positions: vec![], normals: vec![], indices: vec![] };
+    let mut mesh = MeshData {
+        positions: vec![],
+        normals: vec![],
+        indices: vec![],
+    };
     for (normal, up) in [
         (Vec3::X, Vec3::Y),
         (-Vec3::X, Vec3::Y),
@@ -32,7 +36,8 @@ pub fn box_mesh(size: Vec3) -> MeshData {
             mesh.positions.push(p.to_array());
             mesh.normals.push(normal.to_array());
         }
-        mesh.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        mesh.indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
     }
     mesh
 }
@@ -54,7 +59,11 @@ pub struct Node {
 /// The scene every capture test uses: a 6 m floor, a 1 m cube that slides along x over two
 /// seconds, a tall box near it, and a camera looking at them.
 pub fn cube_on_plane() -> (Vec<MeshData>, Vec<Node>) {
-    let meshes = vec![box_mesh(Vec3::new(6.0, 0.1, 6.0)), box_mesh(Vec3::ONE), box_mesh(Vec3::new(0.5, 1.6, 0.5))];
+    let meshes = vec![
+        box_mesh(Vec3::new(6.0, 0.1, 6.0)),
+        box_mesh(Vec3::ONE),
+        box_mesh(Vec3::new(0.5, 1.6, 0.5)),
+    ];
     let nodes = vec![
         Node {
             name: "floor",
@@ -66,7 +75,10 @@ pub fn cube_on_plane() -> (Vec<MeshData>, Vec<Node>) {
             name: "cube",
             kind: NodeKind::Mesh(1),
             transform: Transform::from_xyz(-0.5, 0.5, 0.0),
-            animation: vec![(0.0, Vec3::new(-0.5, 0.5, 0.0)), (2.0, Vec3::new(0.5, 0.5, 0.0))],
+            animation: vec![
+                (0.0, Vec3::new(-0.5, 0.5, 0.0)),
+                (2.0, Vec3::new(0.5, 0.5, 0.0)),
+            ],
         },
         Node {
             name: "pillar",
@@ -77,7 +89,8 @@ pub fn cube_on_plane() -> (Vec<MeshData>, Vec<Node>) {
         Node {
             name: "camera",
             kind: NodeKind::Camera { yfov: 0.8 },
-            transform: Transform::from_xyz(2.2, 2.4, 4.2).looking_at(Vec3::new(0.2, 0.3, 0.0), Vec3::Y),
+            transform: Transform::from_xyz(2.2, 2.4, 4.2)
+                .looking_at(Vec3::new(0.2, 0.3, 0.0), Vec3::Y),
             animation: vec![],
         },
     ];
@@ -104,7 +117,12 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
         accessors.push(accessor);
         accessors.len() - 1
     };
-    let floats = |v: &[[f32; 3]]| v.iter().flatten().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let floats = |v: &[[f32; 3]]| {
+        v.iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect::<Vec<u8>>()
+    };
 
     let mut mesh_json = Vec::new();
     for mesh in meshes {
@@ -114,11 +132,19 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
             max = max.max(Vec3::from(*p));
         }
         let count = mesh.positions.len();
-        let position = push(floats(&mesh.positions), Some(34962), json!({
+        let position = push(
+            floats(&mesh.positions),
+            Some(34962),
+            json!({
             "componentType": 5126, "count": count, "type": "VEC3",
-            "min": min.to_array(), "max": max.to_array() }));
-        let normal = push(floats(&mesh.normals), Some(34962), json!({
-            "componentType": 5126, "count": count, "type": "VEC3" }));
+            "min": min.to_array(), "max": max.to_array() }),
+        );
+        let normal = push(
+            floats(&mesh.normals),
+            Some(34962),
+            json!({
+            "componentType": 5126, "count": count, "type": "VEC3" }),
+        );
         let indices = push(
             mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect(),
             Some(34963),
@@ -150,12 +176,20 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
         }
         if !node.animation.is_empty() {
             let times: Vec<f32> = node.animation.iter().map(|(t, _)| *t).collect();
-            let input = push(times.iter().flat_map(|f| f.to_le_bytes()).collect(), None, json!({
+            let input = push(
+                times.iter().flat_map(|f| f.to_le_bytes()).collect(),
+                None,
+                json!({
                 "componentType": 5126, "count": times.len(), "type": "SCALAR",
-                "min": [times[0]], "max": [times[times.len() - 1]] }));
+                "min": [times[0]], "max": [times[times.len() - 1]] }),
+            );
             let values: Vec<[f32; 3]> = node.animation.iter().map(|(_, v)| v.to_array()).collect();
-            let output = push(floats(&values), None, json!({
-                "componentType": 5126, "count": values.len(), "type": "VEC3" }));
+            let output = push(
+                floats(&values),
+                None,
+                json!({
+                "componentType": 5126, "count": values.len(), "type": "VEC3" }),
+            );
             samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
             channels.push(json!({ "sampler": samplers.len() - 1,
                 "target": { "node": index, "path": "translation" } }));
@@ -179,7 +213,8 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
         doc["cameras"] = json!(cameras);
     }
     if !channels.is_empty() {
-        doc["animations"] = json!([{ "name": "slide", "channels": channels, "samplers": samplers }]);
+        doc["animations"] =
+            json!([{ "name": "slide", "channels": channels, "samplers": samplers }]);
     }
     let mut text = serde_json::to_vec(&doc).expect("glTF JSON serializes");
     while text.len() % 4 != 0 {

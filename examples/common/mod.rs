@@ -87,7 +87,9 @@ pub fn parse_number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
 ) -> Result<T, String> {
     match text.parse::<T>() {
         Ok(v) if v >= min => Ok(v),
-        _ => Err(format!("{flag} takes a number of at least {min}, got '{text}'")),
+        _ => Err(format!(
+            "{flag} takes a number of at least {min}, got '{text}'"
+        )),
     }
 }
 
@@ -172,9 +174,12 @@ fn headless_capture(
         commands
             .spawn(Screenshot::image(target))
             .observe(save_to_disk(out.clone()))
-            .observe(move |_: On<bevy::render::view::screenshot::ScreenshotCaptured>, mut run: ResMut<HeadlessRun>| {
-                run.done = true;
-            });
+            .observe(
+                move |_: On<bevy::render::view::screenshot::ScreenshotCaptured>,
+                      mut run: ResMut<HeadlessRun>| {
+                    run.done = true;
+                },
+            );
     }
     if run.done && run.out.exists() {
         println!("wrote {}", run.out.display());
@@ -224,7 +229,11 @@ pub fn unpad_f32(data: &[u8], width: usize, height: usize, channels: usize) -> V
         let Some(bytes) = data.get(start..start + row) else {
             break;
         };
-        out.extend(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+        out.extend(
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
     }
     out
 }

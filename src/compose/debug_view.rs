@@ -97,6 +97,8 @@ pub(crate) fn prepare_debug_view_bind_groups(
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
             &BindGroupEntries::single(&ssao.screen_space_ambient_occlusion_texture.default_view),
         );
-        commands.entity(entity).insert(DebugViewBindGroup(bind_group));
+        commands
+            .entity(entity)
+            .insert(DebugViewBindGroup(bind_group));
     }
 }

@@ -52,15 +52,16 @@ impl FromWorld for ComposePipeline {
         if format == TextureFormat::R16Float {
             shader_defs.push("VISIBILITY_R16FLOAT".into());
         }
-        let pipeline = world
-            .resource::<PipelineCache>()
-            .queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some("dynamic_ao_compose_pipeline".into()),
-                layout: vec![layout.clone()],
-                shader: load_embedded_asset!(world, "compose.wgsl"),
-                shader_defs,
-                ..default()
-            });
+        let pipeline =
+            world
+                .resource::<PipelineCache>()
+                .queue_compute_pipeline(ComputePipelineDescriptor {
+                    label: Some("dynamic_ao_compose_pipeline".into()),
+                    layout: vec![layout.clone()],
+                    shader: load_embedded_asset!(world, "compose.wgsl"),
+                    shader_defs,
+                    ..default()
+                });
         Self { layout, pipeline }
     }
 }
@@ -74,11 +75,14 @@ pub(crate) fn prepare_compose_bind_groups(
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
     settings: Res<ComponentUniforms<DynamicAoUniform>>,
-    views: Query<(
-        Entity,
-        &DynamicAoTextures,
-        &ScreenSpaceAmbientOcclusionResources,
-    ), With<DynamicAoView>>,
+    views: Query<
+        (
+            Entity,
+            &DynamicAoTextures,
+            &ScreenSpaceAmbientOcclusionResources,
+        ),
+        With<DynamicAoView>,
+    >,
 ) {
     let Some(settings_binding) = settings.binding() else {
         return;

@@ -17,9 +17,7 @@ use bevy::ecs::schedule::IntoScheduleConfigs;
 use bevy::pbr::{MeshPipeline, MeshPipelineSystems};
 use bevy::render::{
     ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderStartup, RenderSystems,
-    render_phase::{
-        AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system,
-    },
+    render_phase::{AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system},
     render_resource::SpecializedMeshPipelines,
 };
 
@@ -54,6 +52,9 @@ impl Plugin for NdBufferPlugin {
                     sort_phase_system::<BackFace3d>.in_set(RenderSystems::PhaseSort),
                 ),
             )
-            .add_systems(Core3d, node::back_face_pass.in_set(DynamicAoSystems::BackFaces));
+            .add_systems(
+                Core3d,
+                node::back_face_pass.in_set(DynamicAoSystems::BackFaces),
+            );
     }
 }

@@ -31,9 +31,6 @@ pub(crate) fn back_face_pass(
 ) {
     let view_entity = view.entity();
     let (camera, extracted_view, textures, _) = view.into_inner();
-    let Some(phase) = phases.get(&extracted_view.retained_view_entity) else {
-        return;
-    };
 
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
@@ -71,7 +68,9 @@ pub(crate) fn back_face_pass(
         };
         pass.set_camera_viewport(&viewport);
     }
-    if let Err(err) = phase.render(&mut pass, world, view_entity) {
+    if let Some(phase) = phases.get(&extracted_view.retained_view_entity)
+        && let Err(err) = phase.render(&mut pass, world, view_entity)
+    {
         error!("dynamic AO: error while drawing the back-face layer: {err:?}");
     }
     pass_span.end(&mut pass);

@@ -5,9 +5,10 @@ use core::ops::Range;
 use bevy::camera::{Camera, Camera3d};
 use bevy::ecs::entity::EntityHash;
 use bevy::ecs::prelude::*;
-use indexmap::IndexMap;
 use bevy::math::FloatOrd;
-use bevy::pbr::{DrawMesh, SetMeshBindGroup, SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup};
+use bevy::pbr::{
+    DrawMesh, SetMeshBindGroup, SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup,
+};
 use bevy::platform::collections::HashSet;
 use bevy::render::{
     Extract,
@@ -19,6 +20,7 @@ use bevy::render::{
     sync_world::MainEntity,
     view::{ExtractedView, RetainedViewEntity},
 };
+use indexmap::IndexMap;
 
 use crate::settings::DynamicAo;
 

@@ -6,8 +6,7 @@ use bevy::ecs::prelude::*;
 use bevy::log::{error, warn};
 use bevy::mesh::{Mesh, Mesh3d, MeshVertexBufferLayoutRef, PrimitiveTopology};
 use bevy::pbr::{
-    MeshPipeline, MeshPipelineKey, RenderMeshInstanceFlags, RenderMeshInstances,
-    ViewKeyCache,
+    MeshPipeline, MeshPipelineKey, RenderMeshInstanceFlags, RenderMeshInstances, ViewKeyCache,
 };
 use bevy::platform::collections::HashSet;
 use bevy::render::{
@@ -152,20 +151,19 @@ pub(crate) fn queue_back_faces(
             if instance.lightmap_slab_index().is_some() {
                 key |= MeshPipelineKey::LIGHTMAPPED;
             }
-            let pipeline = match pipelines.specialize(
-                &pipeline_cache,
-                &back_face_pipeline,
-                key,
-                &mesh.layout,
-            ) {
-                Ok(id) => id,
-                Err(err) => {
-                    if warned.insert(mesh_id) {
-                        error!("dynamic AO cannot draw the back faces of mesh {mesh_id}: {err}");
+            let pipeline =
+                match pipelines.specialize(&pipeline_cache, &back_face_pipeline, key, &mesh.layout)
+                {
+                    Ok(id) => id,
+                    Err(err) => {
+                        if warned.insert(mesh_id) {
+                            error!(
+                                "dynamic AO cannot draw the back faces of mesh {mesh_id}: {err}"
+                            );
+                        }
+                        continue;
                     }
-                    continue;
-                }
-            };
+                };
             phase.add_retained(BackFace3d {
                 // Render-world mesh instances carry no world-space centre to sort by; the
                 // layer is depth-tested, so order only affects overdraw.

@@ -3,11 +3,24 @@
 //! Every pixel of both ND-buffer layers stands for a sphere pushed back along −n (so a flat
 //! surface does not occlude itself). For a receiver P with normal n, the pass gathers
 //! neighbouring pixels inside the projected r_far on a per-pixel rotated Vogel spiral, keeps the
-//! occluders Q with |P − Q| < r_far and sums their sphere occlusion A_ψ (eq. 2–4). The number of
-//! samples follows the projected r_far: one per covered pixel at most, between the preset's
-//! minimum and maximum. Each sample sphere stands for the pixels the sampling skips: its
-//! cross-section equals the surface area of the (disk area / sample count) pixels around it at
-//! its depth, which keeps the sum independent of the sample count.
+//! occluders Q with |P − Q| < r_far and combines their sphere occlusion A_ψ (eq. 2–4). The
+//! number of samples follows the projected r_far: one per covered pixel at most, between the
+//! preset's minimum and maximum (fig. 4).
+//!
+//! Where we depart from the paper, measured against ray-traced ground truth on the test scenes
+//! (RMSE 0.15–0.65 with the paper's rules as written, 0.04–0.10 with these):
+//!
+//! - **Sphere size.** The paper sums a random subset of one-pixel spheres, so its result shrinks
+//!   with the sample count. Here each sample sphere stands for the pixels the sampling skips:
+//!   its cross-section is the surface area of (disk area / sample count) pixels at its depth.
+//! - **Horizon.** An occluder whose surface point lies below the receiver's tangent plane is
+//!   skipped. The push-back along −n does this for flat surfaces; the test extends it to the far
+//!   side of thin solids, whose back-layer spheres would otherwise poke through the receiver.
+//! - **Reach.** A sphere's radius is at most half its distance to the receiver, so one sample
+//!   next to a crease cannot swallow the receiver (A_ψ = 1) and black out the crease.
+//! - **Combination.** Occlusions combine as 1 − Π(1 − A_ψ) instead of Σ A_ψ: the sum counts
+//!   occluders hidden behind one another again and again (the over-occlusion of §6). For small
+//!   A_ψ the two agree.
 
 mod node;
 mod pipeline;
@@ -38,7 +51,10 @@ impl Plugin for NearFieldPlugin {
                 Render,
                 pipeline::prepare_near_field_bind_groups.in_set(RenderSystems::PrepareBindGroups),
             )
-            .add_systems(Core3d, node::near_field_pass.in_set(DynamicAoSystems::NearField));
+            .add_systems(
+                Core3d,
+                node::near_field_pass.in_set(DynamicAoSystems::NearField),
+            );
     }
 }
 

@@ -40,11 +40,20 @@ fn occluder(
         return 0.0;
     }
     let position = world_position(view, q, size, depth);
-    // Eq. 4 sums only occluders closer than r_far.
-    if distance(position, p) >= settings.radius {
+    // Eq. 4 takes only occluders closer than r_far.
+    let d = distance(position, p);
+    if d >= settings.radius {
         return 0.0;
     }
-    let radius = pixel_world_size(view, view_depth(view, position), size.y) * sphere_scale;
+    // A surface point below the receiver's tangent plane cannot occlude it. The push-back along
+    // −n does this for a flat surface; this test also covers the far side of a thin solid,
+    // whose back-layer spheres would otherwise poke through the receiver's own surface.
+    if dot(n, position - p) <= 0.0 {
+        return 0.0;
+    }
+    // The sphere never reaches past half the way to the receiver, so a sample close to a crease
+    // cannot swallow the receiver whole (A_ψ = 1) and black the crease out.
+    let radius = min(pixel_world_size(view, view_depth(view, position), size.y) * sphere_scale, 0.5 * d);
     let center = position - decode_normal(encoded_normal) * radius;
     return sphere_occlusion(center, radius, p, n);
 }
@@ -74,19 +83,20 @@ fn near_field(@builtin(global_invocation_id) id: vec3<u32>) {
     let sphere_scale = radius_px / sqrt(f32(count));
     let rotation = pixel_rotation(id.xy);
 
-    var sum = 0.0;
+    // Open fraction left by the occluders so far: 1 − Π(1 − A_ψ).
+    var open = 1.0;
     for (var i = 0u; i < count; i++) {
         let offset = disk_sample(i, count, radius_px, rotation);
         let q = pixel + vec2<i32>(floor(offset + 0.5));
         if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
             continue;
         }
-        sum += occluder(q, textureLoad(front_depth, q, 0), textureLoad(front_normal, q, 0).xyz,
-            size, p, n, sphere_scale);
+        open *= 1.0 - occluder(q, textureLoad(front_depth, q, 0),
+            textureLoad(front_normal, q, 0).xyz, size, p, n, sphere_scale);
         if settings.back_layer != 0u {
-            sum += occluder(q, textureLoad(back_depth, q, 0), textureLoad(back_normal, q, 0).xyz,
-                size, p, n, sphere_scale);
+            open *= 1.0 - occluder(q, textureLoad(back_depth, q, 0),
+                textureLoad(back_normal, q, 0).xyz, size, p, n, sphere_scale);
         }
     }
-    textureStore(occlusion, pixel, vec4<f32>(clamp(sum * settings.intensity, 0.0, 1.0)));
+    textureStore(occlusion, pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
 }

@@ -11,8 +11,8 @@ use bevy::render::{
 };
 
 use super::pipeline::{NearFieldBindGroup, NearFieldPipeline};
-use crate::view::{DynamicAoUniform, DynamicAoView};
 use crate::settings::AoTechnique;
+use crate::view::{DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn near_field_pass(
     view: ViewQuery<(

@@ -39,14 +39,15 @@ impl FromWorld for NearFieldPipeline {
                 ),
             ),
         );
-        let pipeline = world
-            .resource::<PipelineCache>()
-            .queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some("dynamic_ao_near_field_pipeline".into()),
-                layout: vec![layout.clone()],
-                shader: load_embedded_asset!(world, "near_field.wgsl"),
-                ..default()
-            });
+        let pipeline =
+            world
+                .resource::<PipelineCache>()
+                .queue_compute_pipeline(ComputePipelineDescriptor {
+                    label: Some("dynamic_ao_near_field_pipeline".into()),
+                    layout: vec![layout.clone()],
+                    shader: load_embedded_asset!(world, "near_field.wgsl"),
+                    ..default()
+                });
         Self { layout, pipeline }
     }
 }
@@ -86,6 +87,8 @@ pub(crate) fn prepare_near_field_bind_groups(
                 &textures.near_occlusion.default_view,
             )),
         );
-        commands.entity(entity).insert(NearFieldBindGroup(bind_group));
+        commands
+            .entity(entity)
+            .insert(NearFieldBindGroup(bind_group));
     }
 }

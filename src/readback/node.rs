@@ -45,14 +45,15 @@ impl FromWorld for ReadbackPipeline {
                 ),
             ),
         );
-        let pipeline = world
-            .resource::<PipelineCache>()
-            .queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some("dynamic_ao_readback_pipeline".into()),
-                layout: vec![layout.clone()],
-                shader: load_embedded_asset!(world, "readback.wgsl"),
-                ..default()
-            });
+        let pipeline =
+            world
+                .resource::<PipelineCache>()
+                .queue_compute_pipeline(ComputePipelineDescriptor {
+                    label: Some("dynamic_ao_readback_pipeline".into()),
+                    layout: vec![layout.clone()],
+                    shader: load_embedded_asset!(world, "readback.wgsl"),
+                    ..default()
+                });
         Self { layout, pipeline }
     }
 }
@@ -90,10 +91,11 @@ pub(crate) fn prepare_readback_bind_groups(
         ) else {
             continue;
         };
-        if [visibility, front, back].iter().any(|image| image.size_2d() != size) {
-            warn_once!(
-                "AoReadback images must have the camera's viewport size ({size}); skipping"
-            );
+        if [visibility, front, back]
+            .iter()
+            .any(|image| image.size_2d() != size)
+        {
+            warn_once!("AoReadback images must have the camera's viewport size ({size}); skipping");
             continue;
         }
         let bind_group = render_device.create_bind_group(
@@ -110,7 +112,9 @@ pub(crate) fn prepare_readback_bind_groups(
                 &back.texture_view,
             )),
         );
-        commands.entity(entity).insert(ReadbackBindGroup(bind_group));
+        commands
+            .entity(entity)
+            .insert(ReadbackBindGroup(bind_group));
     }
 }
 

@@ -47,7 +47,12 @@ impl Bvh {
             triangles,
         };
         if !bvh.triangles.is_empty() {
-            bvh.nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, start: 0, count: 0 });
+            bvh.nodes.push(Node {
+                min: Vec3::ZERO,
+                max: Vec3::ZERO,
+                start: 0,
+                count: 0,
+            });
             bvh.build(0, 0, bvh.order.len(), &centroids);
         }
         bvh
@@ -86,8 +91,18 @@ impl Bvh {
             centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
         });
         let left = self.nodes.len();
-        self.nodes.push(Node { min, max, start: 0, count: 0 });
-        self.nodes.push(Node { min, max, start: 0, count: 0 });
+        self.nodes.push(Node {
+            min,
+            max,
+            start: 0,
+            count: 0,
+        });
+        self.nodes.push(Node {
+            min,
+            max,
+            start: 0,
+            count: 0,
+        });
         self.nodes[node].start = left as u32;
         self.nodes[node].count = 0;
         self.build(left, start, mid, centroids);
@@ -95,16 +110,30 @@ impl Bvh {
     }
 
     /// The nearest hit with t in (t_min, t_max).
-    pub fn closest_hit(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+    pub fn closest_hit(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<Hit> {
         self.traverse(origin, direction, t_min, t_max, false)
     }
 
     /// Whether anything is hit with t in (t_min, t_max).
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> bool {
-        self.traverse(origin, direction, t_min, t_max, true).is_some()
+        self.traverse(origin, direction, t_min, t_max, true)
+            .is_some()
     }
 
-    fn traverse(&self, origin: Vec3, direction: Vec3, t_min: f32, mut t_max: f32, any: bool) -> Option<Hit> {
+    fn traverse(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_min: f32,
+        mut t_max: f32,
+        any: bool,
+    ) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -131,7 +160,11 @@ impl Bvh {
                 if let Some((t, uv)) = intersect(&self.triangles[i as usize], origin, direction) {
                     if t > t_min && t < t_max {
                         t_max = t;
-                        best = Some(Hit { t, triangle: i as usize, uv });
+                        best = Some(Hit {
+                            t,
+                            triangle: i as usize,
+                            uv,
+                        });
                         if any {
                             return best;
                         }
@@ -187,8 +220,14 @@ mod tests {
             Vec3::new(-1.0, 1.0, z),
         ];
         vec![
-            Triangle { vertices: [v[0], v[1], v[2]], normals: None },
-            Triangle { vertices: [v[0], v[2], v[3]], normals: None },
+            Triangle {
+                vertices: [v[0], v[1], v[2]],
+                normals: None,
+            },
+            Triangle {
+                vertices: [v[0], v[2], v[3]],
+                normals: None,
+            },
         ]
     }
 
@@ -196,9 +235,13 @@ mod tests {
     fn finds_the_nearest_of_many_layers() {
         let triangles: Vec<Triangle> = (0..50).flat_map(|i| quad(i as f32)).collect();
         let bvh = Bvh::new(triangles);
-        let hit = bvh.closest_hit(Vec3::new(0.2, 0.3, -5.0), Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        let hit = bvh
+            .closest_hit(Vec3::new(0.2, 0.3, -5.0), Vec3::Z, 0.0, f32::INFINITY)
+            .unwrap();
         assert!((hit.t - 5.0).abs() < 1e-5);
-        let hit = bvh.closest_hit(Vec3::new(0.2, 0.3, 60.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        let hit = bvh
+            .closest_hit(Vec3::new(0.2, 0.3, 60.0), -Vec3::Z, 0.0, f32::INFINITY)
+            .unwrap();
         assert!((hit.t - 11.0).abs() < 1e-4);
         assert!(!bvh.any_hit(Vec3::new(0.2, 0.3, -5.0), Vec3::Z, 0.0, 4.9));
         assert!(!bvh.any_hit(Vec3::new(3.0, 0.0, -5.0), Vec3::Z, 0.0, 100.0));

@@ -33,7 +33,11 @@ pub fn camera_ray(view: &ViewMatrices, x: u32, y: u32, width: u32, height: u32) 
 }
 
 /// Visibility of every pixel, row-major. Uses every available core.
-pub fn ground_truth_visibility(bvh: &Bvh, view: &ViewMatrices, settings: &GroundTruthSettings) -> Vec<f32> {
+pub fn ground_truth_visibility(
+    bvh: &Bvh,
+    view: &ViewMatrices,
+    settings: &GroundTruthSettings,
+) -> Vec<f32> {
     let (w, h) = (settings.width, settings.height);
     let mut out = vec![1.0; (w * h) as usize];
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -53,7 +57,13 @@ pub fn ground_truth_visibility(bvh: &Bvh, view: &ViewMatrices, settings: &Ground
 }
 
 /// Visibility of one pixel.
-pub fn pixel_visibility(bvh: &Bvh, view: &ViewMatrices, settings: &GroundTruthSettings, x: u32, y: u32) -> f32 {
+pub fn pixel_visibility(
+    bvh: &Bvh,
+    view: &ViewMatrices,
+    settings: &GroundTruthSettings,
+    x: u32,
+    y: u32,
+) -> f32 {
     let (origin, direction) = camera_ray(view, x, y, settings.width, settings.height);
     let Some(hit) = bvh.closest_hit(origin, direction, 0.0, f32::INFINITY) else {
         return 1.0;

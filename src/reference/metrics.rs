@@ -6,7 +6,11 @@ pub fn rmse(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f32 {
     let (sum, count) = pairs(a, b, mask).fold((0.0f64, 0usize), |(s, c), (x, y)| {
         (s + ((x - y) as f64).powi(2), c + 1)
     });
-    if count == 0 { 0.0 } else { (sum / count as f64).sqrt() as f32 }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt() as f32
+    }
 }
 
 /// Mean of `a − b` over the masked pixels: positive when `a` is brighter (more open).
@@ -14,15 +18,25 @@ pub fn mean_bias(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f32 {
     let (sum, count) = pairs(a, b, mask).fold((0.0f64, 0usize), |(s, c), (x, y)| {
         (s + (x - y) as f64, c + 1)
     });
-    if count == 0 { 0.0 } else { (sum / count as f64) as f32 }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64) as f32
+    }
 }
 
 /// Largest absolute difference over the masked pixels.
 pub fn max_abs_diff(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f32 {
-    pairs(a, b, mask).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+    pairs(a, b, mask)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
 }
 
-fn pairs<'a>(a: &'a [f32], b: &'a [f32], mask: Option<&'a [bool]>) -> impl Iterator<Item = (f32, f32)> + 'a {
+fn pairs<'a>(
+    a: &'a [f32],
+    b: &'a [f32],
+    mask: Option<&'a [bool]>,
+) -> impl Iterator<Item = (f32, f32)> + 'a {
     assert_eq!(a.len(), b.len(), "images differ in size");
     a.iter()
         .zip(b)

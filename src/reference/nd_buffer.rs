@@ -80,6 +80,8 @@ impl NdBuffer {
             return None;
         }
         let layer = if back { &self.back } else { &self.front };
-        layer.get(y as usize * self.width as usize + x as usize).copied()
+        layer
+            .get(y as usize * self.width as usize + x as usize)
+            .copied()
     }
 }

@@ -31,18 +31,29 @@ pub struct NearFieldInputs {
 }
 
 /// Occlusion (0 = open) of every pixel of `nd`, row-major.
-pub fn near_field_occlusion(nd: &NdBuffer, view: &ViewMatrices, inputs: &NearFieldInputs) -> Vec<f32> {
+pub fn near_field_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    inputs: &NearFieldInputs,
+) -> Vec<f32> {
     let mut out = vec![0.0; (nd.width * nd.height) as usize];
     for y in 0..nd.height as i32 {
         for x in 0..nd.width as i32 {
-            out[(y as u32 * nd.width + x as u32) as usize] = pixel_occlusion(nd, view, inputs, x, y);
+            out[(y as u32 * nd.width + x as u32) as usize] =
+                pixel_occlusion(nd, view, inputs, x, y);
         }
     }
     out
 }
 
 /// Occlusion of one pixel.
-pub fn pixel_occlusion(nd: &NdBuffer, view: &ViewMatrices, inputs: &NearFieldInputs, x: i32, y: i32) -> f32 {
+pub fn pixel_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    inputs: &NearFieldInputs,
+    x: i32,
+    y: i32,
+) -> f32 {
     let (w, h) = (nd.width, nd.height);
     let Some(texel) = nd.texel(false, x, y) else {
         return 0.0;
@@ -67,26 +78,28 @@ pub fn pixel_occlusion(nd: &NdBuffer, view: &ViewMatrices, inputs: &NearFieldInp
             return 0.0;
         }
         let position = view.world_position(q.x, q.y, w, h, t.depth);
-        if position.distance(p) >= inputs.radius {
+        let d = position.distance(p);
+        if d >= inputs.radius || n.dot(position - p) <= 0.0 {
             return 0.0;
         }
-        let radius = view.pixel_world_size(view.view_depth(position), h) * sphere_scale;
+        let radius =
+            (view.pixel_world_size(view.view_depth(position), h) * sphere_scale).min(0.5 * d);
         sphere_occlusion(position - t.normal * radius, radius, p, n)
     };
 
-    let mut sum = 0.0;
+    let mut open = 1.0;
     for i in 0..count {
         let offset = disk_sample(i, count, radius_px, rotation);
         let q = pixel + (offset + 0.5).floor().as_ivec2();
         if q == pixel || q.x < 0 || q.y < 0 || q.x >= w as i32 || q.y >= h as i32 {
             continue;
         }
-        sum += occluder(q, false);
+        open *= 1.0 - occluder(q, false);
         if inputs.back_layer {
-            sum += occluder(q, true);
+            open *= 1.0 - occluder(q, true);
         }
     }
-    (sum * inputs.intensity).clamp(0.0, 1.0)
+    ((1.0 - open) * inputs.intensity).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
@@ -106,7 +119,12 @@ mod tests {
         // Falls off with distance and with the angle to the normal.
         let near = sphere_occlusion(Vec3::Y * 2.0, 0.5, Vec3::ZERO, n);
         let far = sphere_occlusion(Vec3::Y * 4.0, 0.5, Vec3::ZERO, n);
-        let slanted = sphere_occlusion(Vec3::new(2.0, 2.0, 0.0).normalize() * 2.0, 0.5, Vec3::ZERO, n);
+        let slanted = sphere_occlusion(
+            Vec3::new(2.0, 2.0, 0.0).normalize() * 2.0,
+            0.5,
+            Vec3::ZERO,
+            n,
+        );
         assert!(near > far && near > slanted && slanted > 0.0);
     }
 }

@@ -32,7 +32,12 @@ impl From<std::io::Error> for Png16Error {
 }
 
 /// Writes `visibility` (row-major, values clamped to [0, 1], NaN as 1) as a 16-bit grayscale PNG.
-pub fn write_visibility_png(path: &Path, width: u32, height: u32, visibility: &[f32]) -> Result<(), Png16Error> {
+pub fn write_visibility_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    visibility: &[f32],
+) -> Result<(), Png16Error> {
     if visibility.len() != (width as usize) * (height as usize) || width == 0 || height == 0 {
         return Err(Png16Error::Shape(format!(
             "{} values for a {width}×{height} image",

@@ -31,19 +31,34 @@ mod tests {
     #[test]
     fn spiral_stays_inside_the_disk_and_covers_it() {
         let count = 64;
-        let samples: Vec<Vec2> = (0..count).map(|i| disk_sample(i, count, 10.0, 0.3)).collect();
+        let samples: Vec<Vec2> = (0..count)
+            .map(|i| disk_sample(i, count, 10.0, 0.3))
+            .collect();
         assert!(samples.iter().all(|s| s.length() <= 10.0 + 1e-4));
         let mean = samples.iter().copied().sum::<Vec2>() / count as f32;
         assert!(mean.length() < 1.0, "spiral is lopsided: mean {mean}");
-        let inner = samples.iter().filter(|s| s.length() < 10.0 / 2f32.sqrt()).count();
-        assert_eq!(inner, 32, "half the samples belong in the inner half of the area");
+        let inner = samples
+            .iter()
+            .filter(|s| s.length() < 10.0 / 2f32.sqrt())
+            .count();
+        assert_eq!(
+            inner, 32,
+            "half the samples belong in the inner half of the area"
+        );
     }
 
     #[test]
     fn rotations_are_spread() {
         let angles: Vec<f32> = (0..256).map(|i| pixel_rotation(i % 16, i / 16)).collect();
-        assert!(angles.iter().all(|a| (0.0..std::f32::consts::TAU).contains(a)));
+        assert!(
+            angles
+                .iter()
+                .all(|a| (0.0..std::f32::consts::TAU).contains(a))
+        );
         let mean = angles.iter().sum::<f32>() / angles.len() as f32;
-        assert!((mean - std::f32::consts::PI).abs() < 0.4, "mean rotation {mean}");
+        assert!(
+            (mean - std::f32::consts::PI).abs() < 0.4,
+            "mean rotation {mean}"
+        );
     }
 }

@@ -56,7 +56,8 @@ impl TriangleScene {
                 self.skipped += 1;
                 continue;
             }
-            let vertices = [0, 1, 2].map(|k| world_from_local.transform_point3(positions[tri[k]].into()));
+            let vertices =
+                [0, 1, 2].map(|k| world_from_local.transform_point3(positions[tri[k]].into()));
             let triangle = Triangle {
                 vertices,
                 normals: normals.map(|n| {

@@ -22,15 +22,29 @@ use crate::harness::GPU_TURN;
 fn binary() -> PathBuf {
     // tests run from target/<profile>/deps; `cargo test` builds the examples next to them.
     let exe = std::env::current_exe().expect("test binary path");
-    let profile = exe.parent().and_then(Path::parent).expect("target/<profile>");
-    let path = profile.join("examples").join(format!("ao_capture{}", std::env::consts::EXE_SUFFIX));
-    assert!(path.is_file(), "{} is missing: run the tests with `cargo test`, which builds the examples", path.display());
+    let profile = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>");
+    let path = profile
+        .join("examples")
+        .join(format!("ao_capture{}", std::env::consts::EXE_SUFFIX));
+    assert!(
+        path.is_file(),
+        "{} is missing: run the tests with `cargo test`, which builds the examples",
+        path.display()
+    );
     path
 }
 
 fn run(args: &[&str]) -> Output {
-    let _turn = GPU_TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    Command::new(binary()).args(args).output().expect("ao_capture runs")
+    let _turn = GPU_TURN
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    Command::new(binary())
+        .args(args)
+        .output()
+        .expect("ao_capture runs")
 }
 
 fn scene_path() -> PathBuf {
@@ -59,7 +73,10 @@ fn lists_its_techniques() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     for name in ["none", "near-field", "bevy-ssao"] {
-        assert!(text.lines().any(|l| l == name), "{name} missing from:\n{text}");
+        assert!(
+            text.lines().any(|l| l == name),
+            "{name} missing from:\n{text}"
+        );
     }
 }
 
@@ -70,32 +87,76 @@ fn bad_input_gives_a_one_line_error() {
     let scene = scene_path();
     let scene = scene.to_str().unwrap();
     let base = |extra: &[&str]| {
-        let mut args = vec!["--width", "32", "--height", "24", "--radius", "0.5", "--technique", "near-field"];
+        let mut args = vec![
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--radius",
+            "0.5",
+            "--technique",
+            "near-field",
+        ];
         args.extend_from_slice(&["--out-ao", out_ao.to_str().unwrap()]);
         args.extend_from_slice(extra);
         args.iter().map(|s| s.to_string()).collect::<Vec<_>>()
     };
     let no_camera = dir.join("no_camera.glb");
     let (meshes, nodes) = gltf_scene::cube_on_plane();
-    let nodes: Vec<_> = nodes.into_iter().filter(|n| !matches!(n.kind, NodeKind::Camera { .. })).collect();
+    let nodes: Vec<_> = nodes
+        .into_iter()
+        .filter(|n| !matches!(n.kind, NodeKind::Camera { .. }))
+        .collect();
     std::fs::write(&no_camera, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
     let corrupt = dir.join("corrupt.glb");
     std::fs::write(&corrupt, b"glTF\x02\0\0\0garbage").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
         (base(&["--scene", "/nonexistent/scene.glb"]), "not found"),
-        ([base(&["--scene", scene]), vec!["--width".into(), "abc".into()]].concat(), "--width"),
-        ([base(&["--scene", scene]), vec!["--radius".into(), "-1".into()]].concat(), "--radius"),
-        ([base(&["--scene", scene]), vec!["--technique".into(), "magic".into()]].concat(), "unknown technique"),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--width".into(), "abc".into()],
+            ]
+            .concat(),
+            "--width",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--radius".into(), "-1".into()],
+            ]
+            .concat(),
+            "--radius",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--technique".into(), "magic".into()],
+            ]
+            .concat(),
+            "unknown technique",
+        ),
         (base(&["--scene", no_camera.to_str().unwrap()]), "no camera"),
         (base(&["--scene", corrupt.to_str().unwrap()]), "cannot load"),
     ];
     for (args, expected) in cases {
         let out = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
         let stderr = String::from_utf8_lossy(&out.stderr);
-        let ours: Vec<&str> = stderr.lines().filter(|l| l.starts_with("ao_capture:")).collect();
+        let ours: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("ao_capture:"))
+            .collect();
         assert!(!out.status.success(), "{args:?} should fail");
-        assert_eq!(ours.len(), 1, "{args:?}: expected one error line, got:\n{stderr}");
-        assert!(ours[0].contains(expected), "{args:?}: '{}' should mention '{expected}'", ours[0]);
+        assert_eq!(
+            ours.len(),
+            1,
+            "{args:?}: expected one error line, got:\n{stderr}"
+        );
+        assert!(
+            ours[0].contains(expected),
+            "{args:?}: '{}' should mention '{expected}'",
+            ours[0]
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -113,10 +174,13 @@ fn generated_scene(time: f32, width: u32, height: u32) -> (Bvh, ViewMatrices) {
         match node.kind {
             NodeKind::Mesh(index) => {
                 let data = &meshes[index];
-                let mesh = Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
-                    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, data.positions.clone())
-                    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, data.normals.clone())
-                    .with_inserted_indices(Indices::U32(data.indices.clone()));
+                let mesh = Mesh::new(
+                    PrimitiveTopology::TriangleList,
+                    RenderAssetUsages::default(),
+                )
+                .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, data.positions.clone())
+                .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, data.normals.clone())
+                .with_inserted_indices(Indices::U32(data.indices.clone()));
                 scene.add_mesh(&mesh, transform.compute_affine());
             }
             NodeKind::Camera { yfov } => {
@@ -126,11 +190,17 @@ fn generated_scene(time: f32, width: u32, height: u32) -> (Bvh, ViewMatrices) {
                     near: 0.05,
                     ..default()
                 };
-                view = Some(ViewMatrices::new(transform.to_matrix(), projection.get_clip_from_view()));
+                view = Some(ViewMatrices::new(
+                    transform.to_matrix(),
+                    projection.get_clip_from_view(),
+                ));
             }
         }
     }
-    (Bvh::new(scene.triangles), view.expect("the scene has a camera"))
+    (
+        Bvh::new(scene.triangles),
+        view.expect("the scene has a camera"),
+    )
 }
 
 #[test]
@@ -141,41 +211,98 @@ fn captures_the_generated_scene_close_to_ground_truth() {
         let out_ao = dir.join(format!("{technique}.png"));
         let out_color = dir.join(format!("{technique}_color.png"));
         let out = run(&[
-            "--scene", scene_path().to_str().unwrap(),
-            "--width", &w.to_string(), "--height", &h.to_string(),
-            "--radius", &radius.to_string(), "--technique", technique,
-            "--time", &time.to_string(),
-            "--out-ao", out_ao.to_str().unwrap(), "--out-color", out_color.to_str().unwrap(),
+            "--scene",
+            scene_path().to_str().unwrap(),
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--radius",
+            &radius.to_string(),
+            "--technique",
+            technique,
+            "--time",
+            &time.to_string(),
+            "--out-ao",
+            out_ao.to_str().unwrap(),
+            "--out-color",
+            out_color.to_str().unwrap(),
         ]);
-        assert!(out.status.success(), "ao_capture failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "ao_capture failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         assert!(out_color.is_file(), "--out-color wrote nothing");
         let (iw, ih, ao) = read_visibility_png(&out_ao).expect("a 16-bit grayscale PNG");
         assert_eq!((iw, ih), (w, h));
         ao
     };
     let none = capture("none");
-    assert!(none.iter().all(|v| *v == 1.0), "technique none must be all open");
+    assert!(
+        none.iter().all(|v| *v == 1.0),
+        "technique none must be all open"
+    );
 
     let ours = capture("near-field");
     let (bvh, view) = generated_scene(time, w, h);
-    let truth = ground_truth_visibility(&bvh, &view, &GroundTruthSettings { width: w, height: h, radius, rays_per_pixel: 256 });
+    let truth = ground_truth_visibility(
+        &bvh,
+        &view,
+        &GroundTruthSettings {
+            width: w,
+            height: h,
+            radius,
+            rays_per_pixel: 256,
+        },
+    );
     // Where ground truth sees no geometry, the capture must say open.
     let sky: Vec<bool> = (0..truth.len())
         .map(|i| {
-            let (origin, dir) = bevy_dynamic_ao::reference::ground_truth::camera_ray(&view, (i as u32) % w, (i as u32) / w, w, h);
+            let (origin, dir) = bevy_dynamic_ao::reference::ground_truth::camera_ray(
+                &view,
+                (i as u32) % w,
+                (i as u32) / w,
+                w,
+                h,
+            );
             bvh.closest_hit(origin, dir, 0.0, f32::INFINITY).is_none()
         })
         .collect();
     let sky_count = sky.iter().filter(|s| **s).count();
-    assert!(sky_count > 100, "the camera should see some sky ({sky_count})");
-    let sky_open = ours.iter().zip(&sky).filter(|(v, s)| **s && **v == 1.0).count();
-    assert!(sky_open as f32 > 0.98 * sky_count as f32, "sky pixels must be 65535 ({sky_open}/{sky_count})");
+    assert!(
+        sky_count > 100,
+        "the camera should see some sky ({sky_count})"
+    );
+    let sky_open = ours
+        .iter()
+        .zip(&sky)
+        .filter(|(v, s)| **s && **v == 1.0)
+        .count();
+    assert!(
+        sky_open as f32 > 0.98 * sky_count as f32,
+        "sky pixels must be 65535 ({sky_open}/{sky_count})"
+    );
     let error = rmse(&ours, &truth, None);
-    println!("ao_capture near-field on the generated scene at t = {time} s: RMSE {error:.4} vs ground truth");
+    println!(
+        "ao_capture near-field on the generated scene at t = {time} s: RMSE {error:.4} vs ground truth"
+    );
     assert!(error < 0.15, "RMSE {error} against ground truth");
     // The pose matters: the cube slid to x = 0 by t = 1 s, so the floor crease follows it.
     let (bvh0, _) = generated_scene(0.0, w, h);
-    let truth0 = ground_truth_visibility(&bvh0, &view, &GroundTruthSettings { width: w, height: h, radius, rays_per_pixel: 64 });
-    assert!(rmse(&ours, &truth, None) < rmse(&ours, &truth0, None), "the capture ignored --time");
+    let truth0 = ground_truth_visibility(
+        &bvh0,
+        &view,
+        &GroundTruthSettings {
+            width: w,
+            height: h,
+            radius,
+            rays_per_pixel: 64,
+        },
+    );
+    assert!(
+        rmse(&ours, &truth, None) < rmse(&ours, &truth0, None),
+        "the capture ignored --time"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -11,13 +11,21 @@ use crate::harness::{Gpu, SceneSpec};
 fn back_faces_occlude_the_floor_next_to_a_box() {
     let radius = 0.75;
     let scene = SceneSpec::new(Transform::from_xyz(0.0, 4.0, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
-        .with(Plane3d::default().mesh().size(10.0, 10.0).build(), Transform::IDENTITY)
-        .with(Cuboid::new(1.0, 1.0, 1.0), Transform::from_xyz(0.0, 0.5, 0.0));
+        .with(
+            Plane3d::default().mesh().size(10.0, 10.0).build(),
+            Transform::IDENTITY,
+        )
+        .with(
+            Cuboid::new(1.0, 1.0, 1.0),
+            Transform::from_xyz(0.0, 0.5, 0.0),
+        );
     let with_back = |back_layer| {
-        DynamicAo::default().with_radius(radius).with_quality(AoQuality::Custom(NearFieldParams {
-            back_layer,
-            ..default()
-        }))
+        DynamicAo::default()
+            .with_radius(radius)
+            .with_quality(AoQuality::Custom(NearFieldParams {
+                back_layer,
+                ..default()
+            }))
     };
     let mut gpu = Gpu::new(&scene, with_back(true));
     let on = gpu.frame(4);
@@ -35,23 +43,49 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
         })
         .collect();
     let count = ring.iter().filter(|r| **r).count();
-    assert!(count > 500, "the ring of floor around the box should be visible ({count} pixels)");
+    assert!(
+        count > 500,
+        "the ring of floor around the box should be visible ({count} pixels)"
+    );
     let mean = |v: &[f32]| {
-        v.iter().zip(&ring).filter(|(_, r)| **r).map(|(v, _)| v).sum::<f32>() / count as f32
+        v.iter()
+            .zip(&ring)
+            .filter(|(_, r)| **r)
+            .map(|(v, _)| v)
+            .sum::<f32>()
+            / count as f32
     };
-    let (on_mean, off_mean, truth_mean) = (mean(&on.visibility), mean(&off.visibility), mean(&truth));
-    println!("floor ring visibility: back layer on {on_mean:.3}, off {off_mean:.3}, ground truth {truth_mean:.3}");
-    assert!(off_mean > 0.97, "without the back layer nothing should occlude the ring: {off_mean}");
-    assert!(truth_mean < 0.9, "ground truth should see the box sides: {truth_mean}");
-    assert!(on_mean < off_mean - 0.05, "the back layer should darken the ring: {on_mean} vs {off_mean}");
+    let (on_mean, off_mean, truth_mean) =
+        (mean(&on.visibility), mean(&off.visibility), mean(&truth));
+    println!(
+        "floor ring visibility: back layer on {on_mean:.3}, off {off_mean:.3}, ground truth {truth_mean:.3}"
+    );
+    assert!(
+        off_mean > 0.97,
+        "without the back layer nothing should occlude the ring: {off_mean}"
+    );
+    assert!(
+        truth_mean < 0.9,
+        "ground truth should see the box sides: {truth_mean}"
+    );
+    assert!(
+        on_mean < off_mean - 0.05,
+        "the back layer should darken the ring: {on_mean} vs {off_mean}"
+    );
     assert!(
         rmse(&on.visibility, &truth, Some(&ring)) < rmse(&off.visibility, &truth, Some(&ring)),
         "the back layer should bring the ring closer to ground truth"
     );
     // The back layer itself: the box sides are there, never in front of the front layer.
     let back_pixels = on.nd.back.iter().filter(|t| t.depth > 0.0).count();
-    assert!(back_pixels > 500, "the back layer should hold the box's sides ({back_pixels})");
+    assert!(
+        back_pixels > 500,
+        "the back layer should hold the box's sides ({back_pixels})"
+    );
     for (front, back) in on.nd.front.iter().zip(&on.nd.back) {
-        assert!(back.depth <= front.depth + 1e-6, "a back face in front of the front layer");
+        assert!(
+            back.depth <= front.depth + 1e-6,
+            "a back face in front of the front layer"
+        );
     }
 }

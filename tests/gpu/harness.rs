@@ -4,6 +4,7 @@
 use std::sync::{Arc, Mutex};
 
 use bevy::app::PluginsState;
+use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use bevy::render::{
@@ -11,7 +12,6 @@ use bevy::render::{
     render_resource::TextureFormat,
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
-use bevy::camera::RenderTarget;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     bvh::Bvh,
@@ -39,7 +39,12 @@ pub struct SceneSpec {
 
 impl SceneSpec {
     pub fn new(camera: Transform) -> Self {
-        Self { meshes: Vec::new(), camera, ambient: 500.0, sun: None }
+        Self {
+            meshes: Vec::new(),
+            camera,
+            ambient: 500.0,
+            sun: None,
+        }
     }
 
     pub fn with(mut self, mesh: impl Into<Mesh>, transform: Transform) -> Self {
@@ -89,7 +94,12 @@ impl Frame {
         ground_truth_visibility(
             bvh,
             &self.view,
-            &GroundTruthSettings { width: WIDTH, height: HEIGHT, radius, rays_per_pixel: 256 },
+            &GroundTruthSettings {
+                width: WIDTH,
+                height: HEIGHT,
+                radius,
+                rays_per_pixel: 256,
+            },
         )
     }
 }
@@ -108,7 +118,9 @@ pub struct Gpu {
 impl Gpu {
     /// A headless app showing `scene` through a camera with `ao`.
     pub fn new(scene: &SceneSpec, ao: DynamicAo) -> Self {
-        let turn = GPU_TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let turn = GPU_TURN
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
         let mut app = App::new();
         app.add_plugins((common::headless_plugins(), DynamicAoPlugin));
         while app.plugins_state() == PluginsState::Adding {
@@ -118,25 +130,39 @@ impl Gpu {
         app.cleanup();
 
         let world = app.world_mut();
-        let target = world.resource_mut::<Assets<Image>>().add(Image::new_target_texture(
-            WIDTH,
-            HEIGHT,
-            TextureFormat::Rgba8UnormSrgb,
-            None,
-        ));
-        let readback = AoReadback::new(&mut world.resource_mut::<Assets<Image>>(), UVec2::new(WIDTH, HEIGHT));
-        let material = world.resource_mut::<Assets<StandardMaterial>>().add(StandardMaterial {
-            base_color: Color::srgb(0.8, 0.8, 0.8),
-            perceptual_roughness: 1.0,
-            reflectance: 0.0,
-            ..default()
-        });
+        let target = world
+            .resource_mut::<Assets<Image>>()
+            .add(Image::new_target_texture(
+                WIDTH,
+                HEIGHT,
+                TextureFormat::Rgba8UnormSrgb,
+                None,
+            ));
+        let readback = AoReadback::new(
+            &mut world.resource_mut::<Assets<Image>>(),
+            UVec2::new(WIDTH, HEIGHT),
+        );
+        let material = world
+            .resource_mut::<Assets<StandardMaterial>>()
+            .add(StandardMaterial {
+                base_color: Color::srgb(0.8, 0.8, 0.8),
+                perceptual_roughness: 1.0,
+                reflectance: 0.0,
+                ..default()
+            });
         for (mesh, transform) in &scene.meshes {
             let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh.clone());
             world.spawn((Mesh3d(mesh), MeshMaterial3d(material.clone()), *transform));
         }
         if let Some((transform, illuminance)) = scene.sun {
-            world.spawn((DirectionalLight { illuminance, shadow_maps_enabled: false, ..default() }, transform));
+            world.spawn((
+                DirectionalLight {
+                    illuminance,
+                    shadow_maps_enabled: false,
+                    ..default()
+                },
+                transform,
+            ));
         }
         let camera = world
             .spawn((
@@ -145,17 +171,30 @@ impl Gpu {
                 Msaa::Off,
                 Tonemapping::None,
                 RenderTarget::Image(target.clone().into()),
-                AmbientLight { brightness: scene.ambient, ..default() },
+                AmbientLight {
+                    brightness: scene.ambient,
+                    ..default()
+                },
                 ao,
                 readback.clone(),
             ))
             .id();
-        Self { app, _turn: turn, camera, readback, target }
+        Self {
+            app,
+            _turn: turn,
+            camera,
+            readback,
+            target,
+        }
     }
 
     /// Changes the camera's settings.
     pub fn set_ao(&mut self, change: impl FnOnce(&mut DynamicAo)) {
-        let mut ao = self.app.world_mut().get_mut::<DynamicAo>(self.camera).expect("camera has DynamicAo");
+        let mut ao = self
+            .app
+            .world_mut()
+            .get_mut::<DynamicAo>(self.camera)
+            .expect("camera has DynamicAo");
         change(&mut ao);
     }
 
@@ -169,7 +208,11 @@ impl Gpu {
     pub fn frame(&mut self, frames: u32) -> Frame {
         self.update(frames);
         let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
-        let images = [&self.readback.visibility, &self.readback.front, &self.readback.back];
+        let images = [
+            &self.readback.visibility,
+            &self.readback.front,
+            &self.readback.back,
+        ];
         let entities: Vec<Entity> = images
             .iter()
             .enumerate()
@@ -206,7 +249,12 @@ impl Gpu {
         };
         Frame {
             visibility: common::unpad_f32(&visibility, w, h, 1),
-            nd: NdBuffer { width: WIDTH, height: HEIGHT, front: texels(&front), back: texels(&back) },
+            nd: NdBuffer {
+                width: WIDTH,
+                height: HEIGHT,
+                front: texels(&front),
+                back: texels(&back),
+            },
             view: self.view(),
         }
     }
@@ -215,7 +263,9 @@ impl Gpu {
     pub fn view(&mut self) -> ViewMatrices {
         let world = self.app.world_mut();
         let camera = world.get::<Camera>(self.camera).expect("camera");
-        let transform = world.get::<GlobalTransform>(self.camera).expect("camera transform");
+        let transform = world
+            .get::<GlobalTransform>(self.camera)
+            .expect("camera transform");
         ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
     }
 
@@ -236,7 +286,11 @@ impl Gpu {
                 break;
             }
         }
-        let data = slot.lock().unwrap().take().expect("the screenshot did not arrive in 60 frames");
+        let data = slot
+            .lock()
+            .unwrap()
+            .take()
+            .expect("the screenshot did not arrive in 60 frames");
         data.chunks_exact(4)
             .take((WIDTH * HEIGHT) as usize)
             .map(|p| {
@@ -252,7 +306,11 @@ impl Gpu {
 
 fn srgb_to_linear(v: u8) -> f32 {
     let c = v as f32 / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// Index of pixel (x, y).

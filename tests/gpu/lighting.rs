@@ -14,22 +14,34 @@ fn luminance(c: Vec3) -> f32 {
 fn direct_light_is_untouched() {
     let mut scene = scenes::cube_on_plane();
     scene.ambient = 0.0;
-    scene.sun = Some((Transform::from_xyz(1.0, 3.0, 2.0).looking_at(Vec3::ZERO, Vec3::Y), 2_000.0));
-    let mut gpu = Gpu::new(&scene, DynamicAo::default().with_technique(AoTechnique::Off));
+    scene.sun = Some((
+        Transform::from_xyz(1.0, 3.0, 2.0).looking_at(Vec3::ZERO, Vec3::Y),
+        2_000.0,
+    ));
+    let mut gpu = Gpu::new(
+        &scene,
+        DynamicAo::default().with_technique(AoTechnique::Off),
+    );
     let off = gpu.color(4);
     gpu.set_ao(|ao| ao.technique = AoTechnique::NearField);
     let frame = gpu.frame(2);
     let on = gpu.color(2);
     // The AO really is strong somewhere in this image, so an unchanged image means something.
     let darkest = frame.visibility.iter().copied().fold(1.0, f32::min);
-    assert!(darkest < 0.6, "the crease should be occluded (min visibility {darkest})");
+    assert!(
+        darkest < 0.6,
+        "the crease should be occluded (min visibility {darkest})"
+    );
     let mut lit = 0;
     for (a, b) in off.iter().zip(&on) {
         let (a, b) = (luminance(*a), luminance(*b));
         if a > 0.05 {
             lit += 1;
             // 8-bit sRGB output: allow one code step besides the 1% bound.
-            assert!((a - b).abs() <= 0.01 * a + 0.004, "a directly lit pixel changed: {a} → {b}");
+            assert!(
+                (a - b).abs() <= 0.01 * a + 0.004,
+                "a directly lit pixel changed: {a} → {b}"
+            );
         }
     }
     assert!(lit > 2000, "too few directly lit pixels ({lit})");
@@ -39,7 +51,10 @@ fn direct_light_is_untouched() {
 fn ambient_light_darkens_in_a_crease() {
     let mut scene = scenes::cube_on_plane();
     scene.ambient = 2_000.0;
-    let mut gpu = Gpu::new(&scene, DynamicAo::default().with_technique(AoTechnique::Off));
+    let mut gpu = Gpu::new(
+        &scene,
+        DynamicAo::default().with_technique(AoTechnique::Off),
+    );
     let off = gpu.color(4);
     gpu.set_ao(|ao| ao.technique = AoTechnique::NearField);
     let frame = gpu.frame(2);
@@ -58,10 +73,19 @@ fn ambient_light_darkens_in_a_crease() {
         crease % WIDTH as usize,
         crease / WIDTH as usize
     );
-    assert!(*visibility < 0.7, "the crease should be occluded: {visibility}");
-    assert!(b < a * 0.85, "ambient light in the crease should darken: {a} → {b}");
+    assert!(
+        *visibility < 0.7,
+        "the crease should be occluded: {visibility}"
+    );
+    assert!(
+        b < a * 0.85,
+        "ambient light in the crease should darken: {a} → {b}"
+    );
     // Far from everything, the open floor keeps its ambient light.
     let open = super::harness::index(WIDTH / 2, HEIGHT - 2);
     let (a, b) = (luminance(off[open]), luminance(on[open]));
-    assert!((a - b).abs() <= 0.02 * a + 0.004, "open floor changed: {a} → {b}");
+    assert!(
+        (a - b).abs() <= 0.02 * a + 0.004,
+        "open floor changed: {a} → {b}"
+    );
 }

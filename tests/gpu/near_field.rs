@@ -27,7 +27,10 @@ fn inputs(ao: &DynamicAo) -> NearFieldInputs {
 
 #[test]
 fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
-    for (name, scene) in [("cube on plane", scenes::cube_on_plane()), ("ball near wall", scenes::ball_near_wall())] {
+    for (name, scene) in [
+        ("cube on plane", scenes::cube_on_plane()),
+        ("ball near wall", scenes::ball_near_wall()),
+    ] {
         let ao = DynamicAo::default().with_quality(AoQuality::Medium);
         let mut gpu = Gpu::new(&scene, ao.clone());
         let frame = gpu.frame(4);
@@ -37,7 +40,10 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
             .collect();
         let mask = frame.geometry_mask();
         let covered = mask.iter().filter(|m| **m).count();
-        assert!(covered > 5000, "{name}: the camera sees too little ({covered} pixels)");
+        assert!(
+            covered > 5000,
+            "{name}: the camera sees too little ({covered} pixels)"
+        );
         let mut diffs: Vec<f32> = frame
             .visibility
             .iter()
@@ -54,8 +60,15 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
         // on a pixel boundary can round to a neighbour on one side only.
         assert!(mean < 0.004, "{name}: mean |GPU − CPU| = {mean}");
         assert!(p99 < 0.03, "{name}: 99th percentile |GPU − CPU| = {p99}");
-        let occluded = cpu.iter().zip(&mask).filter(|(v, m)| **m && **v < 0.8).count();
-        assert!(occluded > 100, "{name}: the scene should have creases ({occluded} occluded pixels)");
+        let occluded = cpu
+            .iter()
+            .zip(&mask)
+            .filter(|(v, m)| **m && **v < 0.8)
+            .count();
+        assert!(
+            occluded > 100,
+            "{name}: the scene should have creases ({occluded} occluded pixels)"
+        );
     }
 }
 
@@ -81,8 +94,14 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
         rows.push((name, ours_rmse, bevy_rmse));
     }
     for (name, ours, bevy) in rows {
-        assert!(ours < RMSE_BOUND, "{name}: near-field RMSE {ours} ≥ {RMSE_BOUND}");
-        assert!(ours <= bevy + 0.005, "{name}: near-field RMSE {ours} worse than Bevy's SSAO {bevy}");
+        assert!(
+            ours < RMSE_BOUND,
+            "{name}: near-field RMSE {ours} ≥ {RMSE_BOUND}"
+        );
+        assert!(
+            ours <= bevy + 0.005,
+            "{name}: near-field RMSE {ours} worse than Bevy's SSAO {bevy}"
+        );
     }
 }
 

@@ -11,26 +11,50 @@ fn floor(size: f32) -> Mesh {
 
 /// A 1 m cube standing on a floor.
 pub fn cube_on_plane() -> SceneSpec {
-    SceneSpec::new(Transform::from_xyz(2.0, 1.8, 2.8).looking_at(Vec3::new(0.0, 0.35, 0.0), Vec3::Y))
-        .with(floor(10.0), Transform::IDENTITY)
-        .with(Cuboid::new(1.0, 1.0, 1.0), Transform::from_xyz(0.0, 0.5, 0.0))
+    SceneSpec::new(
+        Transform::from_xyz(2.0, 1.8, 2.8).looking_at(Vec3::new(0.0, 0.35, 0.0), Vec3::Y),
+    )
+    .with(floor(10.0), Transform::IDENTITY)
+    .with(
+        Cuboid::new(1.0, 1.0, 1.0),
+        Transform::from_xyz(0.0, 0.5, 0.0),
+    )
 }
 
 /// Two walls meeting a floor, with a small box in the corner.
 pub fn room_corner() -> SceneSpec {
-    SceneSpec::new(Transform::from_xyz(2.2, 1.6, 2.2).looking_at(Vec3::new(-0.5, 0.4, -0.5), Vec3::Y))
-        .with(floor(10.0), Transform::IDENTITY)
-        .with(Cuboid::new(4.0, 2.5, 0.1), Transform::from_xyz(0.5, 1.25, -1.55))
-        .with(Cuboid::new(0.1, 2.5, 4.0), Transform::from_xyz(-1.55, 1.25, 0.5))
-        .with(Cuboid::new(0.5, 0.5, 0.5), Transform::from_xyz(-1.2, 0.25, -1.2))
+    SceneSpec::new(
+        Transform::from_xyz(2.2, 1.6, 2.2).looking_at(Vec3::new(-0.5, 0.4, -0.5), Vec3::Y),
+    )
+    .with(floor(10.0), Transform::IDENTITY)
+    .with(
+        Cuboid::new(4.0, 2.5, 0.1),
+        Transform::from_xyz(0.5, 1.25, -1.55),
+    )
+    .with(
+        Cuboid::new(0.1, 2.5, 4.0),
+        Transform::from_xyz(-1.55, 1.25, 0.5),
+    )
+    .with(
+        Cuboid::new(0.5, 0.5, 0.5),
+        Transform::from_xyz(-1.2, 0.25, -1.2),
+    )
 }
 
 /// A ball resting on the floor close to a wall.
 pub fn ball_near_wall() -> SceneSpec {
-    SceneSpec::new(Transform::from_xyz(1.6, 1.3, 2.4).looking_at(Vec3::new(0.0, 0.4, -0.6), Vec3::Y))
-        .with(floor(10.0), Transform::IDENTITY)
-        .with(Cuboid::new(5.0, 2.5, 0.1), Transform::from_xyz(0.0, 1.25, -1.15))
-        .with(Sphere::new(0.4).mesh().uv(48, 24), Transform::from_xyz(0.0, 0.4, -0.6))
+    SceneSpec::new(
+        Transform::from_xyz(1.6, 1.3, 2.4).looking_at(Vec3::new(0.0, 0.4, -0.6), Vec3::Y),
+    )
+    .with(floor(10.0), Transform::IDENTITY)
+    .with(
+        Cuboid::new(5.0, 2.5, 0.1),
+        Transform::from_xyz(0.0, 1.25, -1.15),
+    )
+    .with(
+        Sphere::new(0.4).mesh().uv(48, 24),
+        Transform::from_xyz(0.0, 0.4, -0.6),
+    )
 }
 
 /// All scenes with their names.
