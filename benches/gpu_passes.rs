@@ -1,1 +1,217 @@
-fn main() {}
+//! GPU time per pass, from timestamp queries, for no AO, Bevy's SSAO at each level and ours at
+//! each preset, on the same scene in the same run. Prints a Markdown table.
+//!
+//! `cargo bench --bench gpu_passes` (add `-- --width 1920 --height 1080` for another size).
+//! Timings are for comparison within one run on one adapter; the table names the adapter.
+
+#[path = "../examples/common/mod.rs"]
+mod common;
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use bevy::app::PluginsState;
+use bevy::camera::RenderTarget;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::diagnostic::DiagnosticsStore;
+use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityLevel};
+use bevy::prelude::*;
+use bevy::render::{
+    diagnostic::RenderDiagnosticsPlugin, render_resource::TextureFormat,
+    renderer::RenderAdapterInfo,
+};
+use bevy_dynamic_ao::prelude::*;
+
+const WARMUP_FRAMES: u32 = 10;
+const MEASURED_FRAMES: u32 = 30;
+
+#[derive(Clone)]
+enum Config {
+    NoAo,
+    BevySsao(ScreenSpaceAmbientOcclusionQualityLevel),
+    Ours(AoQuality),
+}
+
+impl Config {
+    fn name(&self) -> String {
+        match self {
+            Config::NoAo => "no AO".into(),
+            Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
+            Config::Ours(quality) => format!("near-field {}", quality.name()),
+        }
+    }
+}
+
+struct Row {
+    name: String,
+    frame_ms: f64,
+    passes: BTreeMap<String, f64>,
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let value = |flag: &str, default: u32| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(default)
+    };
+    let size = UVec2::new(value("--width", 640), value("--height", 480));
+    let configs = [
+        Config::NoAo,
+        Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Low),
+        Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Medium),
+        Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::High),
+        Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Ultra),
+        Config::Ours(AoQuality::Low),
+        Config::Ours(AoQuality::Medium),
+        Config::Ours(AoQuality::High),
+        Config::Ours(AoQuality::Ultra),
+    ];
+    let mut adapter = String::new();
+    let rows: Vec<Row> = configs
+        .iter()
+        .map(|config| run(config, size, &mut adapter))
+        .collect();
+
+    let columns = [
+        ("ssao", "Bevy SSAO"),
+        ("dynamic_ao_back_faces", "back faces"),
+        ("dynamic_ao_near_field", "near field"),
+        ("dynamic_ao_compose", "compose"),
+    ];
+    println!(
+        "\nAdapter: {adapter}; {}×{}; mean of {MEASURED_FRAMES} frames after {WARMUP_FRAMES}.",
+        size.x, size.y
+    );
+    println!(
+        "GPU times in ms from timestamp queries; frame = wall-clock time of one app update.\n"
+    );
+    print!("| configuration | frame (ms) | all passes (GPU ms) |");
+    for (_, title) in columns {
+        print!(" {title} |");
+    }
+    println!();
+    println!("|---|---:|---:|{}", "---:|".repeat(columns.len()));
+    for row in &rows {
+        let total: f64 = row.passes.values().sum();
+        print!("| {} | {:.2} | {:.3} |", row.name, row.frame_ms, total);
+        for (key, _) in columns {
+            match row.passes.get(key) {
+                Some(ms) => print!(" {ms:.3} |"),
+                None => print!(" – |"),
+            }
+        }
+        println!();
+    }
+}
+
+fn run(config: &Config, size: UVec2, adapter: &mut String) -> Row {
+    let mut app = App::new();
+    app.add_plugins((
+        common::headless_plugins(),
+        DynamicAoPlugin,
+        RenderDiagnosticsPlugin,
+    ));
+    while app.plugins_state() == PluginsState::Adding {
+        bevy::tasks::tick_global_task_pools_on_main_thread();
+    }
+    app.finish();
+    app.cleanup();
+    if adapter.is_empty()
+        && let Some(info) = app
+            .get_sub_app(bevy::render::RenderApp)
+            .and_then(|render| render.world().get_resource::<RenderAdapterInfo>())
+    {
+        *adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+    }
+    spawn_scene(app.world_mut(), config, size);
+    for _ in 0..WARMUP_FRAMES {
+        app.update();
+    }
+    let start = Instant::now();
+    for _ in 0..MEASURED_FRAMES {
+        app.update();
+    }
+    let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / MEASURED_FRAMES as f64;
+    let store = app.world().resource::<DiagnosticsStore>();
+    let mut passes = BTreeMap::new();
+    for diagnostic in store.iter() {
+        let path = diagnostic.path().as_str();
+        if let Some(name) = path
+            .strip_prefix("render/")
+            .and_then(|p| p.strip_suffix("/elapsed_gpu"))
+            && let Some(mean) = diagnostic.average()
+        {
+            passes.insert(name.to_string(), mean);
+        }
+    }
+    eprintln!("{}: {passes:?}", config.name());
+    Row {
+        name: config.name(),
+        frame_ms,
+        passes,
+    }
+}
+
+fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
+    let target = world
+        .resource_mut::<Assets<Image>>()
+        .add(Image::new_target_texture(
+            size.x,
+            size.y,
+            TextureFormat::Rgba8UnormSrgb,
+            None,
+        ));
+    let mut camera = world.spawn((
+        Camera3d::default(),
+        Transform::from_xyz(-3.2, 2.6, 4.6).looking_at(Vec3::new(0.3, 0.6, 0.0), Vec3::Y),
+        Msaa::Off,
+        Tonemapping::None,
+        RenderTarget::Image(target.into()),
+    ));
+    match config {
+        Config::NoAo => {}
+        Config::BevySsao(level) => {
+            camera.insert(ScreenSpaceAmbientOcclusion {
+                quality_level: *level,
+                ..default()
+            });
+        }
+        Config::Ours(quality) => {
+            camera.insert(DynamicAo::default().with_quality(*quality));
+        }
+    }
+    let mut meshes = world.resource_mut::<Assets<Mesh>>();
+    let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));
+    let wall = meshes.add(Cuboid::new(12.0, 4.0, 0.2));
+    let cube = meshes.add(Cuboid::new(1.0, 1.0, 1.0));
+    let ball = meshes.add(Sphere::new(0.5).mesh().uv(48, 24));
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    let mut spawn = |mesh: &Handle<Mesh>, transform: Transform| {
+        world.spawn((
+            Mesh3d(mesh.clone()),
+            MeshMaterial3d(material.clone()),
+            transform,
+        ));
+    };
+    spawn(&floor, Transform::IDENTITY);
+    spawn(&wall, Transform::from_xyz(0.0, 2.0, -1.6));
+    for i in 0..5 {
+        spawn(
+            &cube,
+            Transform::from_xyz(-2.0 + i as f32, 0.5, -0.9 + 0.3 * (i % 2) as f32),
+        );
+        spawn(&ball, Transform::from_xyz(-2.0 + i as f32, 0.5, 0.8));
+    }
+    world.spawn((
+        DirectionalLight {
+            illuminance: 3_000.0,
+            ..default()
+        },
+        Transform::from_xyz(3.0, 6.0, 2.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+}

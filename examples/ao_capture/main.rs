@@ -279,8 +279,10 @@ fn store_visibility(
     capture.visibility = Some(common::unpad_f32(&readback.data, w, h, 1));
     commands.entity(readback.entity).despawn();
     // The lit image is captured once the AO is, from the same frame onwards.
-    if let Some(out) = capture.options.out_color.clone() {
-        if let Some(RenderTarget::Image(target)) = cameras.iter().next() {
+    if let Some(out) = capture.options.out_color.clone()
+        && let Some(RenderTarget::Image(target)) = cameras.iter().next()
+    {
+        {
             commands
                 .spawn(Screenshot::image(target.handle.clone()))
                 .observe(

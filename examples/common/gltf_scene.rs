@@ -103,7 +103,7 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
     let mut views: Vec<Value> = Vec::new();
     let mut accessors: Vec<Value> = Vec::new();
     let mut push = |bytes: Vec<u8>, target: Option<u32>, accessor: Value| -> usize {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() });
@@ -217,10 +217,10 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
             json!([{ "name": "slide", "channels": channels, "samplers": samplers }]);
     }
     let mut text = serde_json::to_vec(&doc).expect("glTF JSON serializes");
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + 8 + bin.len();

@@ -83,7 +83,6 @@ impl SpecializedMeshPipeline for BackFacePipeline {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn queue_back_faces(
     draw_functions: Res<DrawFunctions<BackFace3d>>,
     mut pipelines: ResMut<SpecializedMeshPipelines<BackFacePipeline>>,

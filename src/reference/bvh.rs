@@ -157,17 +157,18 @@ impl Bvh {
                 continue;
             }
             for &i in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                if let Some((t, uv)) = intersect(&self.triangles[i as usize], origin, direction) {
-                    if t > t_min && t < t_max {
-                        t_max = t;
-                        best = Some(Hit {
-                            t,
-                            triangle: i as usize,
-                            uv,
-                        });
-                        if any {
-                            return best;
-                        }
+                if let Some((t, uv)) = intersect(&self.triangles[i as usize], origin, direction)
+                    && t > t_min
+                    && t < t_max
+                {
+                    t_max = t;
+                    best = Some(Hit {
+                        t,
+                        triangle: i as usize,
+                        uv,
+                    });
+                    if any {
+                        return best;
                     }
                 }
             }
