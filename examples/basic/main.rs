@@ -17,25 +17,39 @@ keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face lay
 
 fn main() {
     let args = ExampleArgs::parse(USAGE);
+    if let Some(unknown) = args.rest.iter().find(|a| *a != "--debug-view") {
+        eprintln!("error: unknown argument '{unknown}'\n{USAGE}");
+        std::process::exit(2);
+    }
     let mut app = common::example_app("bevy_dynamic_ao: basic", &args);
-    app.add_plugins(DynamicAoPlugin)
-        .add_systems(Startup, setup)
-        .add_systems(Update, (controls, show_settings, spin))
-        .run();
+    app.insert_resource(StartWithDebugView(
+        args.rest.iter().any(|a| a == "--debug-view"),
+    ))
+    .add_plugins(DynamicAoPlugin)
+    .add_systems(Startup, setup)
+    .add_systems(Update, (controls, show_settings, spin))
+    .run();
 }
 
 #[derive(Component)]
 struct Spin;
 
+#[derive(Resource)]
+struct StartWithDebugView(bool);
+
 fn setup(world: &mut World) {
     let target = common::camera_target(world);
+    let debug_view = world.resource::<StartWithDebugView>().0;
     let mut commands = world.commands();
     let mut camera = commands.spawn((
         Camera3d::default(),
         Transform::from_xyz(-3.2, 2.6, 4.6).looking_at(Vec3::new(0.3, 0.6, 0.0), Vec3::Y),
         Msaa::Off,
         Tonemapping::AcesFitted,
-        DynamicAo::default(),
+        DynamicAo {
+            debug_view,
+            ..default()
+        },
         AmbientLight {
             brightness: 900.0,
             ..default()

@@ -81,6 +81,18 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
         let ours = gpu.frame(4);
         let truth = ours.ground_truth(&bvh, BEVY_SSAO_RADIUS);
         let mask = ours.geometry_mask();
+        // The other presets, for the cost/error table of the README and BENCHMARKS.md.
+        let mut presets = String::new();
+        for quality in AoQuality::PRESETS {
+            gpu.set_ao(|ao| ao.quality = quality);
+            let frame = gpu.frame(2);
+            presets += &format!(
+                " {} {:.4}",
+                quality.name(),
+                rmse(&frame.visibility, &truth, Some(&mask))
+            );
+        }
+        println!("{name}: near-field RMSE per preset:{presets}");
         gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
         let bevy = gpu.frame(4);
         let ours_rmse = rmse(&ours.visibility, &truth, Some(&mask));
