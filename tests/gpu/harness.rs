@@ -206,13 +206,44 @@ impl Gpu {
 
     /// Renders `frames` frames, then reads the AO buffer and both ND-buffer layers back.
     pub fn frame(&mut self, frames: u32) -> Frame {
+        let (camera, readback) = (self.camera, self.readback.clone());
+        self.frame_of(camera, &readback, frames)
+    }
+
+    /// Adds another camera with its own settings, image target and read-back.
+    pub fn add_camera(&mut self, transform: Transform, ao: DynamicAo) -> (Entity, AoReadback) {
+        let world = self.app.world_mut();
+        let target = world
+            .resource_mut::<Assets<Image>>()
+            .add(Image::new_target_texture(
+                WIDTH,
+                HEIGHT,
+                TextureFormat::Rgba8UnormSrgb,
+                None,
+            ));
+        let readback = AoReadback::new(
+            &mut world.resource_mut::<Assets<Image>>(),
+            UVec2::new(WIDTH, HEIGHT),
+        );
+        let camera = world
+            .spawn((
+                Camera3d::default(),
+                transform,
+                Msaa::Off,
+                Tonemapping::None,
+                RenderTarget::Image(target.into()),
+                ao,
+                readback.clone(),
+            ))
+            .id();
+        (camera, readback)
+    }
+
+    /// Like [`Gpu::frame`], for any camera with an [`AoReadback`].
+    pub fn frame_of(&mut self, camera: Entity, readback: &AoReadback, frames: u32) -> Frame {
         self.update(frames);
         let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
-        let images = [
-            &self.readback.visibility,
-            &self.readback.front,
-            &self.readback.back,
-        ];
+        let images = [&readback.visibility, &readback.front, &readback.back];
         let entities: Vec<Entity> = images
             .iter()
             .enumerate()
@@ -255,17 +286,17 @@ impl Gpu {
                 front: texels(&front),
                 back: texels(&back),
             },
-            view: self.view(),
+            view: self.view(camera),
         }
     }
 
-    /// The camera's matrices, as its view uniform holds them.
-    pub fn view(&mut self) -> ViewMatrices {
+    /// A camera's matrices, as its view uniform holds them.
+    pub fn view(&mut self, camera: Entity) -> ViewMatrices {
         let world = self.app.world_mut();
-        let camera = world.get::<Camera>(self.camera).expect("camera");
         let transform = world
-            .get::<GlobalTransform>(self.camera)
+            .get::<GlobalTransform>(camera)
             .expect("camera transform");
+        let camera = world.get::<Camera>(camera).expect("camera");
         ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
     }
 

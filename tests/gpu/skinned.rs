@@ -1,0 +1,184 @@
+//! The back-face layer deforms like the front layer: a column bent by a two-joint skin, or by a
+//! morph target, has the same silhouette in both ND-buffer layers (Bevy's prepass deforms the
+//! front layer; our pass must deform the back one the same way).
+
+use bevy::asset::RenderAssetUsages;
+use bevy::camera::visibility::NoFrustumCulling;
+use bevy::mesh::morph::{MeshMorphWeights, MorphAttributes};
+use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
+use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
+use bevy::prelude::*;
+use bevy_dynamic_ao::prelude::*;
+
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
+
+const HALF: f32 = 0.15;
+const LENGTH: f32 = 1.2;
+const RINGS: usize = 12;
+
+/// A square column along +Y; vertices above half its length belong to the second joint.
+fn column() -> Mesh {
+    let (mut positions, mut normals, mut joints, mut weights, mut indices) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut vertex = |p: Vec3, n: Vec3, positions: &mut Vec<[f32; 3]>| {
+        let joint = u16::from(p.y > LENGTH / 2.0 + 1e-4);
+        positions.push(p.to_array());
+        normals.push(n.to_array());
+        joints.push([joint, 0, 0, 0]);
+        weights.push([1.0f32, 0.0, 0.0, 0.0]);
+        positions.len() as u32 - 1
+    };
+    for n in [Vec3::X, Vec3::Z, -Vec3::X, -Vec3::Z] {
+        let t = Vec3::Y.cross(n);
+        let first = positions.len() as u32;
+        for ring in 0..=RINGS {
+            let y = LENGTH * ring as f32 / RINGS as f32;
+            for a in [-1.0, 1.0] {
+                vertex(n * HALF + t * (a * HALF) + Vec3::Y * y, n, &mut positions);
+            }
+        }
+        for ring in 0..RINGS as u32 {
+            let v = first + ring * 2;
+            indices.extend([v, v + 1, v + 3, v, v + 3, v + 2]);
+        }
+    }
+    for (y, n) in [(LENGTH, Vec3::Y), (0.0, -Vec3::Y)] {
+        let corners = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)]
+            .map(|(x, z)| vertex(Vec3::new(x * HALF, y, z * HALF), n, &mut positions));
+        let [a, b, c, d] = if n.y > 0.0 {
+            corners
+        } else {
+            [corners[3], corners[2], corners[1], corners[0]]
+        };
+        indices.extend([a, b, c, a, c, d]);
+    }
+    Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
+    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, normals)
+    .with_inserted_attribute(
+        Mesh::ATTRIBUTE_JOINT_INDEX,
+        VertexAttributeValues::Uint16x4(joints),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT, weights)
+    .with_inserted_indices(Indices::U32(indices))
+}
+
+fn camera() -> Transform {
+    Transform::from_xyz(0.0, 0.7, 2.2).looking_at(Vec3::new(0.2, 0.65, 0.0), Vec3::Y)
+}
+
+#[test]
+fn back_layer_follows_the_skin() {
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let world = gpu.app.world_mut();
+    let bindposes = world
+        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
+        .add(vec![
+            Mat4::IDENTITY,
+            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
+        ]);
+    let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    let root = world.spawn(Transform::IDENTITY).id();
+    let elbow = world
+        .spawn((
+            Transform::from_xyz(0.0, LENGTH / 2.0, 0.0).with_rotation(Quat::from_rotation_z(-0.8)),
+            ChildOf(root),
+        ))
+        .id();
+    world.spawn((
+        Mesh3d(mesh),
+        MeshMaterial3d(material),
+        SkinnedMesh {
+            inverse_bindposes: bindposes,
+            joints: vec![root, elbow],
+        },
+        NoFrustumCulling,
+        Transform::IDENTITY,
+    ));
+    let frame = gpu.frame(6);
+    assert_same_bent_silhouette(&frame, "skinned");
+}
+
+#[test]
+fn back_layer_follows_morph_targets() {
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let mut mesh = column();
+    mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
+    mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
+    let Some(VertexAttributeValues::Float32x3(positions)) =
+        mesh.attribute(Mesh::ATTRIBUTE_POSITION)
+    else {
+        unreachable!()
+    };
+    // One target that shears the upper half to +x.
+    let target: Vec<MorphAttributes> = positions
+        .iter()
+        .map(|p| {
+            let lean = (p[1] - LENGTH / 2.0).max(0.0) * 0.8;
+            MorphAttributes::new(Vec3::X * lean, Vec3::ZERO, Vec3::ZERO)
+        })
+        .collect();
+    mesh.set_morph_targets(target);
+    let world = gpu.app.world_mut();
+    let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh);
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    world.spawn((
+        Mesh3d(mesh),
+        MeshMaterial3d(material),
+        MeshMorphWeights::Value { weights: vec![1.0] },
+        NoFrustumCulling,
+        Transform::IDENTITY,
+    ));
+    let frame = gpu.frame(6);
+    assert_same_bent_silhouette(&frame, "morphed");
+}
+
+fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
+    let front: Vec<bool> = frame.nd.front.iter().map(|t| t.depth > 0.0).collect();
+    let back: Vec<bool> = frame.nd.back.iter().map(|t| t.depth > 0.0).collect();
+    let count = front.iter().filter(|f| **f).count();
+    let differ = front.iter().zip(&back).filter(|(f, b)| f != b).count();
+    println!("{what} column: {count} front pixels, {differ} differ in the back layer");
+    assert!(
+        count > 800,
+        "the column should fill part of the image ({count} pixels)"
+    );
+    assert!(
+        differ * 50 < count,
+        "silhouettes of the two layers differ in {differ} pixels"
+    );
+
+    // The bend is really there: the upper rows of the silhouette lie to the right of the lower.
+    let centre_of_rows = |rows: std::ops::Range<u32>| {
+        let (mut sum, mut n) = (0.0f32, 0.0f32);
+        for y in rows {
+            for x in 0..WIDTH {
+                if front[(y * WIDTH + x) as usize] {
+                    sum += x as f32;
+                    n += 1.0;
+                }
+            }
+        }
+        sum / n.max(1.0)
+    };
+    let top = centre_of_rows(0..HEIGHT / 3);
+    let bottom = centre_of_rows(2 * HEIGHT / 3..HEIGHT);
+    assert!(
+        top - bottom > 8.0,
+        "the {what} column should bend right: top {top}, bottom {bottom}"
+    );
+    for (f, b) in frame.nd.front.iter().zip(&frame.nd.back) {
+        assert!(
+            b.depth <= f.depth + 1e-6,
+            "a back face in front of the front layer"
+        );
+    }
+}
