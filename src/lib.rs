@@ -26,6 +26,8 @@
 //! [`reference`] evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
 //! the benchmarks and the `ao_capture` example use it.
 
+#![warn(missing_docs)]
+
 pub mod compose;
 pub mod nd_buffer;
 pub mod near_field;

@@ -28,10 +28,15 @@ use crate::settings::DynamicAo;
 pub struct BackFace3d {
     /// Distance from the camera, for a front-to-back draw order (metres).
     pub distance: f32,
+    /// The mesh entity: render-world and main-world ids.
     pub entity: (Entity, MainEntity),
+    /// The specialized back-face pipeline of this mesh.
     pub pipeline: CachedRenderPipelineId,
+    /// The draw commands (Bevy's mesh draw).
     pub draw_function: DrawFunctionId,
+    /// Instances drawn by this item, set by Bevy's batching.
     pub batch_range: Range<u32>,
+    /// Dynamic offset or indirect-parameters index, set by Bevy's batching.
     pub extra_index: PhaseItemExtraIndex,
     /// Whether the mesh has an index buffer.
     pub indexed: bool,

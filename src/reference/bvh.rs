@@ -8,7 +8,9 @@ use super::scene::Triangle;
 /// A ray hit: distance along the ray and the triangle index.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
+    /// Distance along the ray (ray-direction units).
     pub t: f32,
+    /// Index into [`Bvh::triangles`].
     pub triangle: usize,
     /// Barycentric coordinates of the hit (weights of vertices 1 and 2).
     pub uv: (f32, f32),

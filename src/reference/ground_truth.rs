@@ -11,7 +11,9 @@ use super::sampling::pcg_hash;
 /// How to trace a ground-truth image.
 #[derive(Clone, Copy, Debug)]
 pub struct GroundTruthSettings {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
     /// Rays longer than this do not count as hits (metres).
     pub radius: f32,

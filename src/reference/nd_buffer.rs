@@ -7,7 +7,9 @@ use bevy::math::{Mat4, Vec3, Vec4, Vec4Swizzles};
 /// depth (0 where nothing was drawn).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NdTexel {
+    /// World-space unit normal.
     pub normal: Vec3,
+    /// Reverse-Z depth (1 = near plane, 0 = infinitely far or empty).
     pub depth: f32,
 }
 
@@ -24,8 +26,11 @@ impl NdTexel {
 /// The matrices of a view, as Bevy's view uniform holds them.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewMatrices {
+    /// Clip space to world space.
     pub world_from_clip: Mat4,
+    /// World space to view space.
     pub view_from_world: Mat4,
+    /// The projection (view space to clip space).
     pub clip_from_view: Mat4,
 }
 
@@ -67,9 +72,13 @@ impl ViewMatrices {
 /// Both layers of an ND-buffer, row-major, top row first.
 #[derive(Clone, Debug)]
 pub struct NdBuffer {
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
+    /// Front layer (Bevy's prepass).
     pub front: Vec<NdTexel>,
+    /// Back-face layer.
     pub back: Vec<NdTexel>,
 }
 

@@ -24,9 +24,13 @@ pub fn sphere_occlusion(center: Vec3, radius: f32, receiver: Vec3, normal: Vec3)
 pub struct NearFieldInputs {
     /// r_far, metres.
     pub radius: f32,
+    /// Multiplier on the occlusion.
     pub intensity: f32,
+    /// Most samples per pixel and layer.
     pub max_samples: u32,
+    /// Fewest samples per pixel and layer.
     pub min_samples: u32,
+    /// Whether the back-face layer takes part.
     pub back_layer: bool,
 }
 

@@ -7,7 +7,9 @@ use std::path::Path;
 /// Errors of reading or writing an AO image.
 #[derive(Debug)]
 pub enum Png16Error {
+    /// The file could not be read or written.
     Io(std::io::Error),
+    /// The PNG encoder or decoder failed.
     Encoding(String),
     /// The buffer does not hold width × height values, or the file is not 16-bit grayscale.
     Shape(String),

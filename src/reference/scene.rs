@@ -6,6 +6,7 @@ use bevy::mesh::{Mesh, PrimitiveTopology, VertexAttributeValues};
 /// One world-space triangle with optional per-vertex normals.
 #[derive(Clone, Copy, Debug)]
 pub struct Triangle {
+    /// World-space corners, counter-clockwise seen from the front.
     pub vertices: [Vec3; 3],
     /// Unit vertex normals, when the mesh has them.
     pub normals: Option<[Vec3; 3]>,
@@ -22,6 +23,7 @@ impl Triangle {
 /// A triangle soup.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleScene {
+    /// The triangles kept.
     pub triangles: Vec<Triangle>,
     /// Triangles dropped because they were degenerate or not finite.
     pub skipped: usize,
