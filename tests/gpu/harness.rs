@@ -112,7 +112,6 @@ pub struct Gpu {
     _turn: std::sync::MutexGuard<'static, ()>,
     pub camera: Entity,
     readback: AoReadback,
-    target: Handle<Image>,
 }
 
 impl Gpu {
@@ -130,18 +129,6 @@ impl Gpu {
         app.cleanup();
 
         let world = app.world_mut();
-        let target = world
-            .resource_mut::<Assets<Image>>()
-            .add(Image::new_target_texture(
-                WIDTH,
-                HEIGHT,
-                TextureFormat::Rgba8UnormSrgb,
-                None,
-            ));
-        let readback = AoReadback::new(
-            &mut world.resource_mut::<Assets<Image>>(),
-            UVec2::new(WIDTH, HEIGHT),
-        );
         let material = world
             .resource_mut::<Assets<StandardMaterial>>()
             .add(StandardMaterial {
@@ -164,28 +151,24 @@ impl Gpu {
                 transform,
             ));
         }
-        let camera = world
-            .spawn((
-                Camera3d::default(),
-                scene.camera,
-                Msaa::Off,
-                Tonemapping::None,
-                RenderTarget::Image(target.clone().into()),
-                AmbientLight {
-                    brightness: scene.ambient,
-                    ..default()
-                },
-                ao,
-                readback.clone(),
-            ))
-            .id();
-        Self {
+        let mut gpu = Self {
             app,
             _turn: turn,
-            camera,
-            readback,
-            target,
-        }
+            camera: Entity::PLACEHOLDER,
+            readback: AoReadback {
+                visibility: Handle::default(),
+                front: Handle::default(),
+                back: Handle::default(),
+            },
+        };
+        let (camera, readback) = gpu.add_camera(scene.camera, ao);
+        gpu.app.world_mut().entity_mut(camera).insert(AmbientLight {
+            brightness: scene.ambient,
+            ..default()
+        });
+        gpu.camera = camera;
+        gpu.readback = readback;
+        gpu
     }
 
     /// Changes the camera's settings.
@@ -300,14 +283,23 @@ impl Gpu {
         ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
     }
 
+    /// The image the main camera renders to.
+    fn target(&self) -> Handle<Image> {
+        match self.app.world().get::<RenderTarget>(self.camera) {
+            Some(RenderTarget::Image(target)) => target.handle.clone(),
+            _ => panic!("the test camera renders to an image"),
+        }
+    }
+
     /// The lit image after `frames` more frames, as linear RGB.
     pub fn color(&mut self, frames: u32) -> Vec<Vec3> {
         self.update(frames);
         let slot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
         let store = slot.clone();
+        let target = self.target();
         self.app
             .world_mut()
-            .spawn(Screenshot::image(self.target.clone()))
+            .spawn(Screenshot::image(target))
             .observe(move |shot: On<ScreenshotCaptured>| {
                 *store.lock().unwrap() = shot.image.data.clone();
             });
