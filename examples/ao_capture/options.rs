@@ -11,6 +11,9 @@ pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H
 --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
+/// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
+const MAX_SIZE: u32 = 8192;
+
 /// What one capture does.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -93,6 +96,13 @@ impl Options {
             }
         }
         let missing = |name: &str| format!("{name} is required (see --help)");
+        for (flag, value) in [("--width", width), ("--height", height)] {
+            if value.is_some_and(|v| v > MAX_SIZE) {
+                return Err(format!(
+                    "{flag} is at most {MAX_SIZE} pixels (a GPU texture limit)"
+                ));
+            }
+        }
         let scene = scene.ok_or_else(|| missing("--scene"))?;
         if !scene.is_file() {
             return Err(format!("scene file {} not found", scene.display()));
