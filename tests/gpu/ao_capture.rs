@@ -20,21 +20,32 @@ use crate::gltf_scene::{self, NodeKind};
 use crate::harness::GPU_TURN;
 
 fn binary() -> PathBuf {
-    // tests run from target/<profile>/deps; `cargo test` builds the examples next to them.
-    let exe = std::env::current_exe().expect("test binary path");
-    let profile = exe
-        .parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>");
-    let path = profile
-        .join("examples")
-        .join(format!("ao_capture{}", std::env::consts::EXE_SUFFIX));
-    assert!(
-        path.is_file(),
-        "{} is missing: run the tests with `cargo test`, which builds the examples",
-        path.display()
-    );
-    path
+    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            // `cargo test` builds examples only as test harnesses, so build the real binary
+            // here, with the same cargo, profile and target folder as the tests themselves.
+            let exe = std::env::current_exe().expect("test binary path");
+            let profile = exe
+                .parent()
+                .and_then(Path::parent)
+                .expect("target/<profile>");
+            let mut args = vec!["build", "--example", "ao_capture"];
+            if profile.file_name().is_some_and(|name| name == "release") {
+                args.push("--release");
+            }
+            let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+            let status = Command::new(cargo)
+                .args(&args)
+                .current_dir(env!("CARGO_MANIFEST_DIR"))
+                .status()
+                .expect("cargo runs");
+            assert!(status.success(), "cargo {args:?} failed");
+            profile
+                .join("examples")
+                .join(format!("ao_capture{}", std::env::consts::EXE_SUFFIX))
+        })
+        .clone()
 }
 
 fn run(args: &[&str]) -> Output {
@@ -127,6 +138,14 @@ fn bad_input_gives_a_one_line_error() {
             ]
             .concat(),
             "--radius",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--height".into(), "100000".into()],
+            ]
+            .concat(),
+            "--height",
         ),
         (
             [
