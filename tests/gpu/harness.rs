@@ -117,11 +117,26 @@ pub struct Gpu {
 impl Gpu {
     /// A headless app showing `scene` through a camera with `ao`.
     pub fn new(scene: &SceneSpec, ao: DynamicAo) -> Self {
+        Self::with_asset_folder(scene, ao, None)
+    }
+
+    /// Like [`Gpu::new`], loading assets from `folder` instead of the crate's `assets/`.
+    pub fn with_asset_folder(scene: &SceneSpec, ao: DynamicAo, folder: Option<&str>) -> Self {
         let turn = GPU_TURN
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         let mut app = App::new();
-        app.add_plugins((common::headless_plugins(), DynamicAoPlugin));
+        let plugins = common::headless_plugins();
+        match folder {
+            Some(folder) => app.add_plugins((
+                plugins.set(bevy::asset::AssetPlugin {
+                    file_path: folder.into(),
+                    ..default()
+                }),
+                DynamicAoPlugin,
+            )),
+            None => app.add_plugins((plugins, DynamicAoPlugin)),
+        };
         while app.plugins_state() == PluginsState::Adding {
             bevy::tasks::tick_global_task_pools_on_main_thread();
         }

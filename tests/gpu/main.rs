@@ -15,4 +15,5 @@ mod harness;
 mod lighting;
 mod near_field;
 mod scenes;
+mod shared_assets;
 mod skinned;
