@@ -98,10 +98,11 @@ fn check_cameras(
         } else {
             None
         };
-        let label = name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
         match problem {
             Some(problem) => {
                 if warned.insert((entity, problem)) {
+                    let label =
+                        name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
                     match problem {
                         Unsupported::Msaa => warn!(
                             "DynamicAo on camera {label} needs Msaa::Off (it is {msaa:?}); \
