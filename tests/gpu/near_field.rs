@@ -1,6 +1,7 @@
 //! The near-field pass against the CPU evaluation of the same formula, and against ground truth
 //! next to Bevy's own SSAO.
 
+use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityLevel};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     metrics::{mean_bias, rmse},
@@ -95,6 +96,25 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
         println!("{name}: near-field RMSE per preset:{presets}");
         gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
         let bevy = gpu.frame(4);
+        let mut levels = String::new();
+        for level in [
+            ScreenSpaceAmbientOcclusionQualityLevel::Low,
+            ScreenSpaceAmbientOcclusionQualityLevel::Medium,
+            ScreenSpaceAmbientOcclusionQualityLevel::Ultra,
+        ] {
+            let camera = gpu.camera;
+            gpu.app
+                .world_mut()
+                .get_mut::<ScreenSpaceAmbientOcclusion>(camera)
+                .expect("DynamicAo brings Bevy's SSAO component")
+                .quality_level = level;
+            let frame = gpu.frame(2);
+            levels += &format!(
+                " {level:?} {:.4}",
+                rmse(&frame.visibility, &truth, Some(&mask))
+            );
+        }
+        println!("{name}: Bevy SSAO RMSE per level:{levels} (High below)");
         let ours_rmse = rmse(&ours.visibility, &truth, Some(&mask));
         let bevy_rmse = rmse(&bevy.visibility, &truth, Some(&mask));
         let ours_bias = mean_bias(&ours.visibility, &truth, Some(&mask));
