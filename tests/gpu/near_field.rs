@@ -1,7 +1,9 @@
 //! The near-field pass against the CPU evaluation of the same formula, and against ground truth
 //! next to Bevy's own SSAO.
 
+use bevy::camera::ScalingMode;
 use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityLevel};
+use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     metrics::{mean_bias, rmse},
@@ -28,12 +30,25 @@ fn inputs(ao: &DynamicAo) -> NearFieldInputs {
 
 #[test]
 fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
-    for (name, scene) in [
-        ("cube on plane", scenes::cube_on_plane()),
-        ("ball near wall", scenes::ball_near_wall()),
+    for (name, scene, orthographic) in [
+        ("cube on plane", scenes::cube_on_plane(), false),
+        ("ball near wall", scenes::ball_near_wall(), false),
+        ("cube on plane, orthographic", scenes::cube_on_plane(), true),
     ] {
         let ao = DynamicAo::default().with_quality(AoQuality::Medium);
         let mut gpu = Gpu::new(&scene, ao.clone());
+        if orthographic {
+            let camera = gpu.camera;
+            gpu.app
+                .world_mut()
+                .entity_mut(camera)
+                .insert(Projection::Orthographic(OrthographicProjection {
+                    scaling_mode: ScalingMode::FixedVertical {
+                        viewport_height: 3.0,
+                    },
+                    ..OrthographicProjection::default_3d()
+                }));
+        }
         let frame = gpu.frame(4);
         let cpu: Vec<f32> = near_field_occlusion(&frame.nd, &frame.view, &inputs(&ao))
             .into_iter()
