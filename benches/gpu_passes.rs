@@ -79,6 +79,7 @@ fn main() {
         ("ssao", "Bevy SSAO"),
         ("dynamic_ao_back_faces", "back faces"),
         ("dynamic_ao_near_field", "near field"),
+        ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_compose", "compose"),
     ];
     println!(

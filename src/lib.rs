@@ -19,7 +19,9 @@
 //! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer; our
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
 //! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4).
-//! 3. [`compose`] turns occlusion into visibility and writes it into the texture Bevy's PBR
+//! 3. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
+//!    cross depth edges (Bavoil & Sainz 2008).
+//! 4. [`compose`] turns occlusion into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
 //!    environment specular darken; direct lights are untouched.
 //!
@@ -29,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod compose;
+pub mod filter;
 pub mod nd_buffer;
 pub mod near_field;
 pub mod readback;
@@ -40,13 +43,13 @@ mod view;
 use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
-pub use settings::{AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+pub use settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, NearFieldParams};
 
 /// Everything a user of the crate usually needs.
 pub mod prelude {
     pub use crate::DynamicAoPlugin;
     pub use crate::readback::AoReadback;
-    pub use crate::settings::{AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+    pub use crate::settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, NearFieldParams};
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
@@ -59,6 +62,7 @@ impl Plugin for DynamicAoPlugin {
     fn build(&self, app: &mut App) {
         load_shader_library!(app, "shaders/nd_buffer.wgsl");
         load_shader_library!(app, "shaders/sampling.wgsl");
+        load_shader_library!(app, "shaders/settings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
 
         app.register_type::<DynamicAo>()
@@ -67,6 +71,7 @@ impl Plugin for DynamicAoPlugin {
                 view::ViewPlugin,
                 nd_buffer::NdBufferPlugin,
                 near_field::NearFieldPlugin,
+                filter::FilterPlugin,
                 compose::ComposePlugin,
                 readback::ReadbackPlugin,
             ));

@@ -16,6 +16,8 @@ pub enum DynamicAoSystems {
     BackFaces,
     /// Image-space near-field occlusion from both ND-buffer layers.
     NearField,
+    /// Cross-bilateral blur of the occlusion.
+    Filter,
     /// Combines the occlusion terms and writes visibility for Bevy's PBR lighting.
     Compose,
     /// Debug view and read-back copies, after the lit image exists.
@@ -29,7 +31,7 @@ pub(crate) fn configure(app: &mut App) {
     use DynamicAoSystems::*;
     render_app.configure_sets(
         Core3d,
-        (BackFaces, NearField, Compose)
+        (BackFaces, NearField, Filter, Compose)
             .chain()
             // The front layer is Bevy's prepass output.
             .after(Core3dSystems::Prepass)

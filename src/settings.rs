@@ -9,6 +9,10 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 pub const DEFAULT_RADIUS: f32 = 0.75;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
+/// Default half-width of the cross-bilateral blur, pixels.
+pub const DEFAULT_BLUR_RADIUS: u32 = 4;
+/// Default depth sharpness of the cross-bilateral blur (no unit).
+pub const DEFAULT_BLUR_SHARPNESS: f32 = 16.0;
 
 /// Dynamic ambient occlusion for a 3D camera.
 ///
@@ -34,6 +38,8 @@ pub struct DynamicAo {
     /// Multiplier on the summed occlusion before clamping to [0, 1]. No unit.
     /// Valid: ≥ 0. Default: [`DEFAULT_INTENSITY`] (the formula as published).
     pub intensity: f32,
+    /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
+    pub blur: AoBlur,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -46,6 +52,7 @@ impl Default for DynamicAo {
             quality: AoQuality::default(),
             radius: DEFAULT_RADIUS,
             intensity: DEFAULT_INTENSITY,
+            blur: AoBlur::default(),
             debug_view: false,
         }
     }
@@ -61,6 +68,12 @@ impl DynamicAo {
     /// The same settings with another quality preset.
     pub fn with_quality(mut self, quality: AoQuality) -> Self {
         self.quality = quality;
+        self
+    }
+
+    /// The same settings with another blur.
+    pub fn with_blur(mut self, blur: AoBlur) -> Self {
+        self.blur = blur;
         self
     }
 
@@ -85,6 +98,54 @@ impl DynamicAo {
             self.intensity
         } else {
             DEFAULT_INTENSITY
+        }
+    }
+}
+
+/// Separable cross-bilateral blur of the occlusion buffer, X then Y (Bavoil & Sainz 2008,
+/// "Cross Bilateral Filter"): a Gaussian in image space whose weights fall with the difference in
+/// view depth, so occlusion does not bleed across silhouettes.
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub struct AoBlur {
+    /// Half-width of the kernel; the kernel is `2 * radius + 1` pixels wide per pass and its
+    /// Gaussian has σ = (radius + 1) / 2. Units: pixels. Valid: 0 (off) ..= 16.
+    /// Default: [`DEFAULT_BLUR_RADIUS`].
+    pub radius: u32,
+    /// How fast a sample's weight falls with its depth difference, relative to the centre
+    /// pixel's depth: weight × exp(−(sharpness · Δz / z)²). 0 is a plain Gaussian. No unit.
+    /// Valid: ≥ 0. Default: [`DEFAULT_BLUR_SHARPNESS`].
+    pub sharpness: f32,
+}
+
+impl Default for AoBlur {
+    fn default() -> Self {
+        Self {
+            radius: DEFAULT_BLUR_RADIUS,
+            sharpness: DEFAULT_BLUR_SHARPNESS,
+        }
+    }
+}
+
+impl AoBlur {
+    /// Largest radius the blur accepts.
+    pub const MAX_RADIUS: u32 = 16;
+
+    /// No blur.
+    pub const OFF: AoBlur = AoBlur {
+        radius: 0,
+        sharpness: DEFAULT_BLUR_SHARPNESS,
+    };
+
+    /// The same blur clamped into its valid ranges (a bad sharpness becomes the default).
+    pub fn sanitized(&self) -> Self {
+        Self {
+            radius: self.radius.min(Self::MAX_RADIUS),
+            sharpness: if self.sharpness.is_finite() && self.sharpness >= 0.0 {
+                self.sharpness
+            } else {
+                DEFAULT_BLUR_SHARPNESS
+            },
         }
     }
 }
@@ -236,6 +297,8 @@ mod tests {
         assert_eq!(ao.technique, AoTechnique::NearField);
         assert_eq!(ao.quality, AoQuality::High);
         assert_eq!(AoQuality::High.params(), NearFieldParams::default());
+        assert_eq!(ao.blur.radius, DEFAULT_BLUR_RADIUS);
+        assert_eq!(ao.blur.sharpness, DEFAULT_BLUR_SHARPNESS);
         assert!(!ao.debug_view);
     }
 
@@ -264,6 +327,13 @@ mod tests {
         })
         .params();
         assert_eq!((p.max_samples, p.min_samples), (1, 1));
+        let blur = AoBlur {
+            radius: 99,
+            sharpness: f32::NAN,
+        }
+        .sanitized();
+        assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
+        assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
     }
 
     #[test]

@@ -138,6 +138,8 @@ fn check_cameras(
 pub(crate) struct DynamicAoView {
     pub technique: AoTechnique,
     pub back_layer: bool,
+    /// Blur half-width, pixels (0 = off).
+    pub blur_radius: u32,
     pub debug_view: bool,
 }
 
@@ -160,6 +162,10 @@ pub(crate) struct DynamicAoUniform {
     pub back_layer: u32,
     /// 1 when the near-field term is on.
     pub near_field: u32,
+    /// Blur half-width, pixels (0 = off).
+    pub blur_radius: u32,
+    /// Blur depth sharpness, no unit.
+    pub blur_sharpness: f32,
 }
 
 fn extract_views(
@@ -184,11 +190,13 @@ fn extract_views(
             continue;
         }
         let params = ao.quality.params();
+        let blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
                 back_layer: near_field && params.back_layer,
+                blur_radius: if near_field { blur.radius } else { 0 },
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -198,6 +206,8 @@ fn extract_views(
                 min_samples: params.min_samples,
                 back_layer: u32::from(params.back_layer),
                 near_field: u32::from(near_field),
+                blur_radius: blur.radius,
+                blur_sharpness: blur.sharpness,
             },
         ));
     }
@@ -209,6 +219,8 @@ pub(crate) struct DynamicAoTextures {
     pub back_depth: CachedTexture,
     pub back_normal: CachedTexture,
     pub near_occlusion: CachedTexture,
+    /// Between the two passes of the blur.
+    pub blur_scratch: CachedTexture,
 }
 
 fn prepare_view_textures(
@@ -247,6 +259,11 @@ fn prepare_view_textures(
             back_normal: texture("dynamic_ao_back_normal", NORMAL_FORMAT, attachment),
             near_occlusion: texture(
                 "dynamic_ao_near_occlusion",
+                OCCLUSION_FORMAT,
+                TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
+            ),
+            blur_scratch: texture(
+                "dynamic_ao_blur_scratch",
                 OCCLUSION_FORMAT,
                 TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
             ),

@@ -3,8 +3,8 @@
 //!
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
-//!     --radius R --technique NAME [--preset low|medium|high|ultra] [--frames N] \
-//!     [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+//!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
+//!     [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique list` prints the technique names. Bevy's own SSAO (`bevy-ssao`) has a radius
@@ -166,6 +166,10 @@ fn scene_ready(
             technique: options.technique,
             quality: options.preset,
             radius: options.radius,
+            blur: AoBlur {
+                radius: options.blur,
+                ..default()
+            },
             ..default()
         },
         readback.clone(),

@@ -2,13 +2,13 @@
 
 use std::path::PathBuf;
 
-use bevy_dynamic_ao::{AoQuality, AoTechnique};
+use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique};
 
 use crate::common::parse_number;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--frames N] [--time SECONDS] \
---out-ao AO.png [--out-color COLOR.png]
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--frames N] \
+[--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -24,6 +24,8 @@ pub struct Options {
     pub radius: f32,
     pub technique: AoTechnique,
     pub preset: AoQuality,
+    /// Half-width of the cross-bilateral blur, pixels (0 = off).
+    pub blur: u32,
     /// Frames rendered after the scene is posed, before the capture.
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
@@ -38,6 +40,7 @@ impl Options {
         let (mut scene, mut width, mut height, mut radius, mut technique) =
             (None, None, None, None, None);
         let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
+        let mut blur = AoBlur::default().radius;
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -76,6 +79,12 @@ impl Options {
                     ))?;
                 }
                 "--frames" => frames = parse_number("--frames", &value()?, 1u32)?,
+                "--blur" => {
+                    blur = parse_number("--blur", &value()?, 0u32)?;
+                    if blur > AoBlur::MAX_RADIUS {
+                        return Err(format!("--blur is at most {} pixels", AoBlur::MAX_RADIUS));
+                    }
+                }
                 "--time" => {
                     let text = value()?;
                     time = text
@@ -117,6 +126,7 @@ impl Options {
             radius: radius.ok_or_else(|| missing("--radius"))?,
             technique: technique.ok_or_else(|| missing("--technique"))?,
             preset,
+            blur,
             frames,
             time,
             out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,

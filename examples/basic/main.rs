@@ -13,7 +13,7 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str =
     "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
-keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer, Esc quit";
+keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer, F blur, Esc quit";
 
 fn main() {
     let args = ExampleArgs::parse(USAGE);
@@ -138,6 +138,13 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
                 _ => AoTechnique::BevySsao,
             };
         }
+        if keys.just_pressed(KeyCode::KeyF) {
+            ao.blur = if ao.blur.radius == 0 {
+                AoBlur::default()
+            } else {
+                AoBlur::OFF
+            };
+        }
         if keys.just_pressed(KeyCode::KeyD) {
             ao.debug_view = !ao.debug_view;
         }
@@ -168,13 +175,14 @@ fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<Hel
     };
     let params = ao.quality.params();
     text.0 = format!(
-        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | debug view {}\n\
-         Space AO on/off  B Bevy SSAO  D debug view  1-4 presets  L back layer  Esc quit",
+        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | blur {} px | debug view {}\n\
+         Space AO on/off  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  Esc quit",
         ao.technique.name(),
         ao.quality.name(),
         params.max_samples,
         if params.back_layer { "on" } else { "off" },
         ao.radius,
+        ao.blur.radius,
         if ao.debug_view { "on" } else { "off" },
     );
 }

@@ -1,16 +1,9 @@
 // Combined ambient occlusion (Shanmugam & Arikan 2007, §6): the terms add and clamp, and the
 // result is handed to Bevy's PBR lighting as visibility, 1 − occlusion.
 
-struct Settings {
-    radius: f32,
-    intensity: f32,
-    max_samples: u32,
-    min_samples: u32,
-    back_layer: u32,
-    near_field: u32,
-}
+#import bevy_dynamic_ao::settings::DynamicAoSettings
 
-@group(0) @binding(0) var<uniform> settings: Settings;
+@group(0) @binding(0) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
 #ifdef VISIBILITY_R16FLOAT
 @group(0) @binding(2) var visibility: texture_storage_2d<r16float, write>;

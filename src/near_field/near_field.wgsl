@@ -5,18 +5,10 @@
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
 #import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
 #import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
-
-struct Settings {
-    radius: f32,
-    intensity: f32,
-    max_samples: u32,
-    min_samples: u32,
-    back_layer: u32,
-    near_field: u32,
-}
+#import bevy_dynamic_ao::settings::DynamicAoSettings
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: Settings;
+@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(2) var front_depth: texture_depth_2d;
 @group(0) @binding(3) var front_normal: texture_2d<f32>;
 @group(0) @binding(4) var back_depth: texture_depth_2d;

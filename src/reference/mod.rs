@@ -3,6 +3,7 @@
 //!
 //! - [`nd_buffer`]: an ND-buffer read back from the GPU and the camera that made it.
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
+//! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
 //! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
 //! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
 //!   binary hits within a distance R, 1 = open (eq. 1 of the papers).
@@ -10,6 +11,7 @@
 //! - [`png16`]: 16-bit grayscale PNG files of visibility.
 
 pub mod bvh;
+pub mod filter;
 pub mod ground_truth;
 pub mod metrics;
 pub mod nd_buffer;

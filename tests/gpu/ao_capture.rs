@@ -150,6 +150,14 @@ fn bad_input_gives_a_one_line_error() {
         (
             [
                 base(&["--scene", scene]),
+                vec!["--blur".into(), "99".into()],
+            ]
+            .concat(),
+            "--blur",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
                 vec!["--technique".into(), "magic".into()],
             ]
             .concat(),

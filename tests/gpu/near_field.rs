@@ -6,6 +6,7 @@ use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityL
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
+    filter::cross_bilateral_blur,
     metrics::{mean_bias, rmse},
     near_field::{NearFieldInputs, near_field_occlusion},
 };
@@ -35,7 +36,13 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
         ("ball near wall", scenes::ball_near_wall(), false),
         ("cube on plane, orthographic", scenes::cube_on_plane(), true),
     ] {
-        let ao = DynamicAo::default().with_quality(AoQuality::Medium);
+        // A wide blur, so the comparison covers the filter as much as the formula.
+        let ao = DynamicAo::default()
+            .with_quality(AoQuality::Medium)
+            .with_blur(AoBlur {
+                radius: 8,
+                ..default()
+            });
         let mut gpu = Gpu::new(&scene, ao.clone());
         if orthographic {
             let camera = gpu.camera;
@@ -50,10 +57,16 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
                 }));
         }
         let frame = gpu.frame(4);
-        let cpu: Vec<f32> = near_field_occlusion(&frame.nd, &frame.view, &inputs(&ao))
-            .into_iter()
-            .map(|occlusion| 1.0 - occlusion)
-            .collect();
+        // The formula, then the blur, as the GPU runs them.
+        let occlusion = near_field_occlusion(&frame.nd, &frame.view, &inputs(&ao));
+        let blurred = cross_bilateral_blur(
+            &occlusion,
+            &frame.nd,
+            &frame.view,
+            ao.blur.radius,
+            ao.blur.sharpness,
+        );
+        let cpu: Vec<f32> = blurred.into_iter().map(|o| 1.0 - o).collect();
         let mask = frame.geometry_mask();
         let covered = mask.iter().filter(|m| **m).count();
         assert!(

@@ -1,0 +1,60 @@
+// Separable cross-bilateral blur of the occlusion buffer (Bavoil & Sainz 2008, "Cross Bilateral
+// Filter"). `reference::filter` is the CPU twin.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::settings::DynamicAoSettings
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(2) var depth: texture_depth_2d;
+@group(0) @binding(3) var input: texture_2d<f32>;
+@group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
+
+// Distance in front of the camera for a reverse-Z depth, metres.
+fn linear_depth(d: f32) -> f32 {
+    let p = view.view_from_clip * vec4<f32>(0.0, 0.0, d, 1.0);
+    return -p.z / p.w;
+}
+
+fn blur(pixel: vec2<i32>, step: vec2<i32>) {
+    let dims = vec2<i32>(textureDimensions(depth));
+    if any(pixel >= dims) {
+        return;
+    }
+    let center_depth = textureLoad(depth, pixel, 0);
+    if center_depth <= 0.0 {
+        textureStore(output, pixel, vec4<f32>(0.0));
+        return;
+    }
+    let z0 = linear_depth(center_depth);
+    let radius = i32(settings.blur_radius);
+    let sigma = (f32(radius) + 1.0) * 0.5;
+    let falloff = 1.0 / (2.0 * sigma * sigma);
+    var sum = 0.0;
+    var weights = 0.0;
+    for (var i = -radius; i <= radius; i++) {
+        let q = pixel + step * i;
+        if any(q < vec2<i32>(0)) || any(q >= dims) {
+            continue;
+        }
+        let d = textureLoad(depth, q, 0);
+        if d <= 0.0 {
+            continue;
+        }
+        let dz = (linear_depth(d) - z0) / z0 * settings.blur_sharpness;
+        let w = exp(-f32(i * i) * falloff - dz * dz);
+        sum += w * textureLoad(input, q, 0).r;
+        weights += w;
+    }
+    textureStore(output, pixel, vec4<f32>(sum / weights));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn blur_x(@builtin(global_invocation_id) id: vec3<u32>) {
+    blur(vec2<i32>(id.xy), vec2<i32>(1, 0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn blur_y(@builtin(global_invocation_id) id: vec3<u32>) {
+    blur(vec2<i32>(id.xy), vec2<i32>(0, 1));
+}

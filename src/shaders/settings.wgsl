@@ -1,0 +1,18 @@
+// The per-view uniform every pass reads; `view::DynamicAoUniform` on the Rust side.
+
+#define_import_path bevy_dynamic_ao::settings
+
+struct DynamicAoSettings {
+    // r_far, metres.
+    radius: f32,
+    intensity: f32,
+    max_samples: u32,
+    min_samples: u32,
+    // 1 when the back-face layer takes part.
+    back_layer: u32,
+    // 1 when the near-field term is on.
+    near_field: u32,
+    // Cross-bilateral blur: half-width in pixels (0 = off) and depth sharpness (no unit).
+    blur_radius: u32,
+    blur_sharpness: f32,
+}
