@@ -30,6 +30,7 @@ enum Config {
     NoAo,
     BevySsao(ScreenSpaceAmbientOcclusionQualityLevel),
     Ours(AoQuality),
+    Horizon,
 }
 
 impl Config {
@@ -38,6 +39,7 @@ impl Config {
             Config::NoAo => "no AO".into(),
             Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
             Config::Ours(quality) => format!("near-field {}", quality.name()),
+            Config::Horizon => "horizon (8 directions × 8 steps)".into(),
         }
     }
 }
@@ -68,6 +70,7 @@ fn main() {
         Config::Ours(AoQuality::Medium),
         Config::Ours(AoQuality::High),
         Config::Ours(AoQuality::Ultra),
+        Config::Horizon,
     ];
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
@@ -79,6 +82,7 @@ fn main() {
         ("ssao", "Bevy SSAO"),
         ("dynamic_ao_back_faces", "back faces"),
         ("dynamic_ao_near_field", "near field"),
+        ("dynamic_ao_horizon", "horizon"),
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_compose", "compose"),
     ];
@@ -193,6 +197,9 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
         }
         Config::Ours(quality) => {
             camera.insert(DynamicAo::default().with_quality(*quality));
+        }
+        Config::Horizon => {
+            camera.insert(DynamicAo::default().with_technique(AoTechnique::Horizon));
         }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();

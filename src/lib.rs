@@ -18,7 +18,8 @@
 //!
 //! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer; our
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
-//! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4).
+//! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4), or
+//!    [`horizon`] computes horizon-based occlusion from the front layer (Bavoil & Sainz 2008).
 //! 3. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
 //!    cross depth edges (Bavoil & Sainz 2008).
 //! 4. [`compose`] turns occlusion into visibility and writes it into the texture Bevy's PBR
@@ -32,6 +33,7 @@
 
 pub mod compose;
 pub mod filter;
+pub mod horizon;
 pub mod nd_buffer;
 pub mod near_field;
 pub mod readback;
@@ -43,13 +45,15 @@ mod view;
 use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
-pub use settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+pub use settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams};
 
 /// Everything a user of the crate usually needs.
 pub mod prelude {
     pub use crate::DynamicAoPlugin;
     pub use crate::readback::AoReadback;
-    pub use crate::settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, NearFieldParams};
+    pub use crate::settings::{
+        AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams,
+    };
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
@@ -71,6 +75,7 @@ impl Plugin for DynamicAoPlugin {
                 view::ViewPlugin,
                 nd_buffer::NdBufferPlugin,
                 near_field::NearFieldPlugin,
+                horizon::HorizonPlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,
                 readback::ReadbackPlugin,

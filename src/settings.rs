@@ -38,6 +38,8 @@ pub struct DynamicAo {
     /// Multiplier on the summed occlusion before clamping to [0, 1]. No unit.
     /// Valid: ≥ 0. Default: [`DEFAULT_INTENSITY`] (the formula as published).
     pub intensity: f32,
+    /// Parameters of [`AoTechnique::Horizon`]. Default: [`HorizonParams::default`].
+    pub horizon: HorizonParams,
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
@@ -52,6 +54,7 @@ impl Default for DynamicAo {
             quality: AoQuality::default(),
             radius: DEFAULT_RADIUS,
             intensity: DEFAULT_INTENSITY,
+            horizon: HorizonParams::default(),
             blur: AoBlur::default(),
             debug_view: false,
         }
@@ -159,15 +162,18 @@ pub enum AoTechnique {
     /// Image-space near-field AO from the two-layer ND-buffer (Shanmugam & Arikan 2007, §4).
     #[default]
     NearField,
+    /// Horizon-based AO on the front layer (Bavoil & Sainz 2008), normal-quality mode.
+    Horizon,
     /// Bevy's built-in SSAO, left running unchanged (for comparison).
     BevySsao,
 }
 
 impl AoTechnique {
     /// Every technique with the name `ao_capture --technique` takes for it.
-    pub const ALL: [(&'static str, AoTechnique); 3] = [
+    pub const ALL: [(&'static str, AoTechnique); 4] = [
         ("none", AoTechnique::Off),
         ("near-field", AoTechnique::NearField),
+        ("horizon", AoTechnique::Horizon),
         ("bevy-ssao", AoTechnique::BevySsao),
     ];
 
@@ -183,6 +189,60 @@ impl AoTechnique {
             .find(|(_, t)| *t == self)
             .map(|(n, _)| *n)
             .unwrap_or("none")
+    }
+}
+
+/// Parameters of horizon-based AO (Bavoil & Sainz 2008, "Horizon-Based Ambient Occlusion"),
+/// normal-quality mode: the horizon is integrated over the hemisphere around the per-pixel normal.
+/// The radius is [`DynamicAo::radius`].
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub struct HorizonParams {
+    /// Image-space directions per pixel, randomly rotated per pixel. Valid: 1..=32. Default: 8.
+    pub directions: u32,
+    /// Most steps per direction; fewer where the projected radius covers fewer pixels.
+    /// Valid: 1..=32. Default: 8.
+    pub steps: u32,
+    /// Raises the tangent plane by this angle, hiding creases of coarse tessellation.
+    /// Units: radians. Valid: 0..π/2. Default: 0.1.
+    pub angle_bias: f32,
+    /// W0: scale of the per-sample attenuation W0 · W(r/R), W(x) = 1 − x². No unit.
+    /// Valid: ≥ 0. Default: 1.
+    pub attenuation: f32,
+    /// Scale on the integrated occlusion. No unit. Valid: ≥ 0. Default: 1.
+    pub contrast: f32,
+}
+
+impl Default for HorizonParams {
+    fn default() -> Self {
+        Self {
+            directions: 8,
+            steps: 8,
+            angle_bias: 0.1,
+            attenuation: 1.0,
+            contrast: 1.0,
+        }
+    }
+}
+
+impl HorizonParams {
+    /// The same parameters clamped into their valid ranges; bad floats become defaults.
+    pub fn sanitized(&self) -> Self {
+        let d = Self::default();
+        let valid = |v: f32, max: f32, default: f32| {
+            if v.is_finite() && (0.0..=max).contains(&v) {
+                v
+            } else {
+                default
+            }
+        };
+        Self {
+            directions: self.directions.clamp(1, 32),
+            steps: self.steps.clamp(1, 32),
+            angle_bias: valid(self.angle_bias, 1.5, d.angle_bias),
+            attenuation: valid(self.attenuation, f32::MAX, d.attenuation),
+            contrast: valid(self.contrast, f32::MAX, d.contrast),
+        }
     }
 }
 
@@ -298,6 +358,8 @@ mod tests {
         assert_eq!(ao.quality, AoQuality::High);
         assert_eq!(AoQuality::High.params(), NearFieldParams::default());
         assert_eq!(ao.blur.radius, DEFAULT_BLUR_RADIUS);
+        assert_eq!(ao.horizon, HorizonParams::default());
+        assert_eq!(ao.horizon.sanitized(), HorizonParams::default());
         assert_eq!(ao.blur.sharpness, DEFAULT_BLUR_SHARPNESS);
         assert!(!ao.debug_view);
     }

@@ -160,12 +160,18 @@ pub(crate) struct DynamicAoUniform {
     pub min_samples: u32,
     /// 1 when the back-face layer takes part.
     pub back_layer: u32,
-    /// 1 when the near-field term is on.
+    /// 1 when an image-space term (near-field or horizon) is on.
     pub near_field: u32,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
     /// Blur depth sharpness, no unit.
     pub blur_sharpness: f32,
+    /// Horizon-based AO parameters (see [`crate::HorizonParams`]).
+    pub horizon_directions: u32,
+    pub horizon_steps: u32,
+    pub horizon_angle_bias: f32,
+    pub horizon_attenuation: f32,
+    pub horizon_contrast: f32,
 }
 
 fn extract_views(
@@ -192,11 +198,13 @@ fn extract_views(
         let params = ao.quality.params();
         let blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
+        let image_space = near_field || ao.technique == AoTechnique::Horizon;
+        let horizon = ao.horizon.sanitized();
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
                 back_layer: near_field && params.back_layer,
-                blur_radius: if near_field { blur.radius } else { 0 },
+                blur_radius: if image_space { blur.radius } else { 0 },
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -205,9 +213,14 @@ fn extract_views(
                 max_samples: params.max_samples,
                 min_samples: params.min_samples,
                 back_layer: u32::from(params.back_layer),
-                near_field: u32::from(near_field),
+                near_field: u32::from(image_space),
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,
+                horizon_directions: horizon.directions,
+                horizon_steps: horizon.steps,
+                horizon_angle_bias: horizon.angle_bias,
+                horizon_attenuation: horizon.attenuation,
+                horizon_contrast: horizon.contrast,
             },
         ));
     }

@@ -10,9 +10,15 @@ struct DynamicAoSettings {
     min_samples: u32,
     // 1 when the back-face layer takes part.
     back_layer: u32,
-    // 1 when the near-field term is on.
+    // 1 when an image-space term (near-field or horizon) is on.
     near_field: u32,
     // Cross-bilateral blur: half-width in pixels (0 = off) and depth sharpness (no unit).
     blur_radius: u32,
     blur_sharpness: f32,
+    // Horizon-based AO: directions, steps per direction, angle bias (radians), W0, contrast.
+    horizon_directions: u32,
+    horizon_steps: u32,
+    horizon_angle_bias: f32,
+    horizon_attenuation: f32,
+    horizon_contrast: f32,
 }

@@ -12,6 +12,7 @@ mod back_layer;
 mod bad_input;
 mod cameras;
 mod harness;
+mod horizon;
 mod lighting;
 mod near_field;
 mod scenes;

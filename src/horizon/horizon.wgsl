@@ -1,0 +1,91 @@
+// Horizon-based ambient occlusion, Bavoil & Sainz 2008, normal-quality mode: per image-space
+// direction, the rise of the horizon above the tangent plane, attenuated by W0 · (1 − (r/R)²).
+// `reference::horizon` is the CPU twin; keep the two in step.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, pixel_world_size}
+#import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::settings::DynamicAoSettings
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(2) var depth_texture: texture_depth_2d;
+@group(0) @binding(3) var normal_texture: texture_2d<f32>;
+@group(0) @binding(4) var occlusion: texture_storage_2d<r32float, write>;
+
+const TAU: f32 = 6.28318530717958648;
+const HALF_PI: f32 = 1.57079632679489662;
+// 1 / 2³²: maps a 32-bit hash into [0, 1).
+const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
+
+// View-space position of the centre of `pixel` at reverse-Z depth `depth`.
+fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
+    let uv = (vec2<f32>(pixel) + 0.5) / size;
+    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = textureDimensions(depth_texture);
+    if id.x >= dims.x || id.y >= dims.y {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let size = vec2<f32>(dims);
+    let depth = textureLoad(depth_texture, pixel, 0);
+    let world_normal = decode_normal(textureLoad(normal_texture, pixel, 0).xyz);
+    if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
+        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        return;
+    }
+    let p = view_position(pixel, size, depth);
+    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    let radius = settings.radius;
+    let radius_px = radius / pixel_world_size(view, -p.z, size.y);
+    // Fewer steps where the radius covers fewer pixels: never two steps in one pixel.
+    let steps = clamp(u32(radius_px), 1u, settings.horizon_steps);
+    let step_px = radius_px / f32(steps);
+    let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x68bc21ebu));
+    let rotation = f32(hash) * HASH_TO_UNIT;
+    let jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
+    let directions = settings.horizon_directions;
+
+    var sum = 0.0;
+    for (var i = 0u; i < directions; i++) {
+        let angle = (f32(i) + rotation) * TAU / f32(directions);
+        let dir = vec2<f32>(cos(angle), sin(angle));
+        // The view-space direction this image direction stands for (image y points down), and
+        // the elevation of the tangent plane along it.
+        let along = vec3<f32>(dir.x, -dir.y, 0.0);
+        let tangent = along - n * dot(n, along);
+        let sin_tangent = clamp(tangent.z / max(length(tangent), 1e-6), -1.0, 1.0);
+        var sin_horizon = sin(min(asin(sin_tangent) + settings.horizon_angle_bias, HALF_PI));
+        var ao = 0.0;
+        for (var k = 0u; k < steps; k++) {
+            let offset = dir * ((f32(k) + jitter) * step_px + 1.0);
+            let q = pixel + vec2<i32>(floor(offset + 0.5));
+            if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
+                continue;
+            }
+            let dq = textureLoad(depth_texture, q, 0);
+            if dq <= 0.0 {
+                continue;
+            }
+            let v = view_position(q, size, dq) - p;
+            let r = length(v);
+            if r >= radius || r <= 0.0 {
+                continue;
+            }
+            let sin_elevation = v.z / r;
+            if sin_elevation > sin_horizon {
+                let x = r / radius;
+                ao += settings.horizon_attenuation * (1.0 - x * x) * (sin_elevation - sin_horizon);
+                sin_horizon = sin_elevation;
+            }
+        }
+        sum += ao;
+    }
+    let value = settings.horizon_contrast * settings.intensity * sum / f32(directions);
+    textureStore(occlusion, pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+}

@@ -1,0 +1,117 @@
+//! Horizon-based occlusion (Bavoil & Sainz 2008, normal-quality mode) on the CPU, step for
+//! step as `horizon/horizon.wgsl` computes it.
+
+use bevy::math::{IVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
+
+use super::nd_buffer::{NdBuffer, ViewMatrices};
+use super::sampling::pcg_hash;
+
+const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
+
+/// Parameters of one evaluation, as the GPU uniform carries them.
+#[derive(Clone, Copy, Debug)]
+pub struct HorizonInputs {
+    /// R, metres.
+    pub radius: f32,
+    /// Multiplier on the occlusion.
+    pub intensity: f32,
+    /// Directions per pixel.
+    pub directions: u32,
+    /// Most steps per direction.
+    pub steps: u32,
+    /// Angle bias, radians.
+    pub angle_bias: f32,
+    /// W0.
+    pub attenuation: f32,
+    /// Contrast.
+    pub contrast: f32,
+}
+
+fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
+    let u = (pixel.x as f32 + 0.5) / width as f32;
+    let v = (pixel.y as f32 + 0.5) / height as f32;
+    let p = view.clip_from_view.inverse() * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
+    p.xyz() / p.w
+}
+
+/// Occlusion (0 = open) of every pixel of the front layer of `nd`, row-major.
+pub fn horizon_occlusion(nd: &NdBuffer, view: &ViewMatrices, inputs: &HorizonInputs) -> Vec<f32> {
+    (0..nd.width * nd.height)
+        .map(|i| {
+            pixel_occlusion(
+                nd,
+                view,
+                inputs,
+                (i % nd.width) as i32,
+                (i / nd.width) as i32,
+            )
+        })
+        .collect()
+}
+
+/// Occlusion of one pixel.
+pub fn pixel_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    inputs: &HorizonInputs,
+    x: i32,
+    y: i32,
+) -> f32 {
+    let (w, h) = (nd.width, nd.height);
+    let Some(texel) = nd.texel(false, x, y) else {
+        return 0.0;
+    };
+    if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
+        return 0.0;
+    }
+    let pixel = IVec2::new(x, y);
+    let p = view_position(view, pixel, w, h, texel.depth);
+    let n = (view.view_from_world * texel.normal.extend(0.0))
+        .xyz()
+        .normalize();
+    let radius_px = inputs.radius / view.pixel_world_size(-p.z, h);
+    let steps = (radius_px as u32).clamp(1, inputs.steps);
+    let step_px = radius_px / steps as f32;
+    let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x68bc_21eb));
+    let rotation = hash as f32 * HASH_TO_UNIT;
+    let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
+
+    let mut sum = 0.0;
+    for i in 0..inputs.directions {
+        let angle = (i as f32 + rotation) * std::f32::consts::TAU / inputs.directions as f32;
+        let dir = Vec2::new(angle.cos(), angle.sin());
+        let along = Vec3::new(dir.x, -dir.y, 0.0);
+        let tangent = along - n * n.dot(along);
+        let sin_tangent = (tangent.z / tangent.length().max(1e-6)).clamp(-1.0, 1.0);
+        let mut sin_horizon = (sin_tangent.asin() + inputs.angle_bias)
+            .min(std::f32::consts::FRAC_PI_2)
+            .sin();
+        let mut ao = 0.0;
+        for k in 0..steps {
+            let offset = dir * ((k as f32 + jitter) * step_px + 1.0);
+            let q = pixel + (offset + 0.5).floor().as_ivec2();
+            if q == pixel || q.x < 0 || q.y < 0 || q.x >= w as i32 || q.y >= h as i32 {
+                continue;
+            }
+            let Some(t) = nd.texel(false, q.x, q.y) else {
+                continue;
+            };
+            if t.depth <= 0.0 {
+                continue;
+            }
+            let v = view_position(view, q, w, h, t.depth) - p;
+            let r = v.length();
+            if r >= inputs.radius || r <= 0.0 {
+                continue;
+            }
+            let sin_elevation = v.z / r;
+            if sin_elevation > sin_horizon {
+                let x = r / inputs.radius;
+                ao += inputs.attenuation * (1.0 - x * x) * (sin_elevation - sin_horizon);
+                sin_horizon = sin_elevation;
+            }
+        }
+        sum += ao;
+    }
+    (inputs.contrast * inputs.intensity * sum / inputs.directions as f32).clamp(0.0, 1.0)
+}

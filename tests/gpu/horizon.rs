@@ -1,0 +1,74 @@
+//! Horizon-based AO against the CPU evaluation of the same steps, and against ground truth.
+
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::{
+    horizon::{HorizonInputs, horizon_occlusion},
+    metrics::{mean_bias, rmse},
+};
+
+use crate::harness::Gpu;
+use crate::scenes;
+
+fn inputs(ao: &DynamicAo) -> HorizonInputs {
+    let h = ao.horizon.sanitized();
+    HorizonInputs {
+        radius: ao.radius,
+        intensity: ao.intensity,
+        directions: h.directions,
+        steps: h.steps,
+        angle_bias: h.angle_bias,
+        attenuation: h.attenuation,
+        contrast: h.contrast,
+    }
+}
+
+#[test]
+fn horizon_matches_the_cpu_evaluation_and_tracks_ground_truth() {
+    let radius = 0.73;
+    for (name, scene) in scenes::all() {
+        let ao = DynamicAo::default()
+            .with_technique(AoTechnique::Horizon)
+            .with_radius(radius)
+            .with_blur(AoBlur::OFF);
+        let mut gpu = Gpu::new(&scene, ao.clone());
+        let frame = gpu.frame(4);
+        let mask = frame.geometry_mask();
+        let cpu: Vec<f32> = horizon_occlusion(&frame.nd, &frame.view, &inputs(&ao))
+            .into_iter()
+            .map(|o| 1.0 - o)
+            .collect();
+        let mut diffs: Vec<f32> = frame
+            .visibility
+            .iter()
+            .zip(&cpu)
+            .zip(&mask)
+            .filter(|(_, m)| **m)
+            .map(|((g, c), _)| (g - c).abs())
+            .collect();
+        diffs.sort_by(f32::total_cmp);
+        let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
+        let p99 = diffs[diffs.len() * 99 / 100];
+        let truth = frame.ground_truth(&scene.bvh(), radius);
+        let raw = rmse(&frame.visibility, &truth, Some(&mask));
+        gpu.set_ao(|ao| ao.blur = AoBlur::default());
+        let blurred = gpu.frame(3);
+        let filtered = rmse(&blurred.visibility, &truth, Some(&mask));
+        let bias = mean_bias(&blurred.visibility, &truth, Some(&mask));
+        println!(
+            "{name}: horizon GPU vs CPU mean |diff| {mean:.5}, 99th percentile {p99:.5}; \
+             RMSE vs ground truth {raw:.4} unfiltered, {filtered:.4} blurred (bias {bias:+.4})"
+        );
+        assert!(mean < 0.004, "{name}: mean |GPU − CPU| = {mean}");
+        assert!(p99 < 0.03, "{name}: 99th percentile |GPU − CPU| = {p99}");
+        assert!(
+            frame
+                .visibility
+                .iter()
+                .zip(&mask)
+                .any(|(v, m)| *m && *v < 0.8),
+            "{name}: horizon AO found no crease"
+        );
+        // Single-layer horizon AO misses what hides behind silhouettes; bounded like Bevy's SSAO.
+        assert!(filtered < 0.16, "{name}: horizon RMSE {filtered}");
+    }
+}
