@@ -31,6 +31,7 @@ enum Config {
     BevySsao(ScreenSpaceAmbientOcclusionQualityLevel),
     Ours(AoQuality),
     Horizon,
+    RayMarch,
 }
 
 impl Config {
@@ -40,6 +41,7 @@ impl Config {
             Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
             Config::Ours(quality) => format!("near-field {}", quality.name()),
             Config::Horizon => "horizon (8 directions × 8 steps)".into(),
+            Config::RayMarch => "ray march (8 × 4 rays × 8 steps)".into(),
         }
     }
 }
@@ -71,6 +73,7 @@ fn main() {
         Config::Ours(AoQuality::High),
         Config::Ours(AoQuality::Ultra),
         Config::Horizon,
+        Config::RayMarch,
     ];
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
@@ -83,6 +86,7 @@ fn main() {
         ("dynamic_ao_back_faces", "back faces"),
         ("dynamic_ao_near_field", "near field"),
         ("dynamic_ao_horizon", "horizon"),
+        ("dynamic_ao_ray_march", "ray march"),
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_compose", "compose"),
     ];
@@ -200,6 +204,9 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
         }
         Config::Horizon => {
             camera.insert(DynamicAo::default().with_technique(AoTechnique::Horizon));
+        }
+        Config::RayMarch => {
+            camera.insert(DynamicAo::default().with_technique(AoTechnique::RayMarch));
         }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();

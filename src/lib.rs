@@ -36,6 +36,7 @@ pub mod filter;
 pub mod horizon;
 pub mod nd_buffer;
 pub mod near_field;
+pub mod ray_march;
 pub mod readback;
 pub mod reference;
 pub mod schedule;
@@ -45,14 +46,16 @@ mod view;
 use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
-pub use settings::{AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams};
+pub use settings::{
+    AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams, RayMarchParams,
+};
 
 /// Everything a user of the crate usually needs.
 pub mod prelude {
     pub use crate::DynamicAoPlugin;
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams,
+        AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonParams, NearFieldParams, RayMarchParams,
     };
 }
 
@@ -76,6 +79,7 @@ impl Plugin for DynamicAoPlugin {
                 nd_buffer::NdBufferPlugin,
                 near_field::NearFieldPlugin,
                 horizon::HorizonPlugin,
+                ray_march::RayMarchPlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,
                 readback::ReadbackPlugin,

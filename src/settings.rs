@@ -40,6 +40,8 @@ pub struct DynamicAo {
     pub intensity: f32,
     /// Parameters of [`AoTechnique::Horizon`]. Default: [`HorizonParams::default`].
     pub horizon: HorizonParams,
+    /// Parameters of [`AoTechnique::RayMarch`]. Default: [`RayMarchParams::default`].
+    pub ray_march: RayMarchParams,
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
@@ -55,6 +57,7 @@ impl Default for DynamicAo {
             radius: DEFAULT_RADIUS,
             intensity: DEFAULT_INTENSITY,
             horizon: HorizonParams::default(),
+            ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
             debug_view: false,
         }
@@ -71,6 +74,12 @@ impl DynamicAo {
     /// The same settings with another quality preset.
     pub fn with_quality(mut self, quality: AoQuality) -> Self {
         self.quality = quality;
+        self
+    }
+
+    /// The same settings with other ray-march parameters.
+    pub fn with_ray_march(mut self, ray_march: RayMarchParams) -> Self {
+        self.ray_march = ray_march;
         self
     }
 
@@ -164,16 +173,19 @@ pub enum AoTechnique {
     NearField,
     /// Horizon-based AO on the front layer (Bavoil & Sainz 2008), normal-quality mode.
     Horizon,
+    /// Brute-force rays marched through both ND-buffer layers: the in-engine reference.
+    RayMarch,
     /// Bevy's built-in SSAO, left running unchanged (for comparison).
     BevySsao,
 }
 
 impl AoTechnique {
     /// Every technique with the name `ao_capture --technique` takes for it.
-    pub const ALL: [(&'static str, AoTechnique); 4] = [
+    pub const ALL: [(&'static str, AoTechnique); 5] = [
         ("none", AoTechnique::Off),
         ("near-field", AoTechnique::NearField),
         ("horizon", AoTechnique::Horizon),
+        ("ray-march", AoTechnique::RayMarch),
         ("bevy-ssao", AoTechnique::BevySsao),
     ];
 
@@ -242,6 +254,44 @@ impl HorizonParams {
             angle_bias: valid(self.angle_bias, 1.5, d.angle_bias),
             attenuation: valid(self.attenuation, f32::MAX, d.attenuation),
             contrast: valid(self.contrast, f32::MAX, d.contrast),
+        }
+    }
+}
+
+/// Parameters of the ray-marched reference (Bavoil & Sainz 2008, "Ray-Marched Ambient
+/// Occlusion"): `directions × rays_per_direction` cosine-weighted rays around the normal, each
+/// marched in `steps` equal steps over the radius R ([`DynamicAo::radius`]). A step is blocked
+/// where it lies behind the front layer and in front of the back-face layer (or, where no back
+/// face was drawn, less than R behind the front layer).
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub struct RayMarchParams {
+    /// Azimuths around the normal, randomly rotated per pixel. Valid: 1..=64. Default: 8.
+    pub directions: u32,
+    /// Elevations per azimuth, stratified for a cosine-weighted hemisphere. Valid: 1..=64.
+    /// Default: 4.
+    pub rays_per_direction: u32,
+    /// Samples per ray. Valid: 1..=64. Default: 8.
+    pub steps: u32,
+}
+
+impl Default for RayMarchParams {
+    fn default() -> Self {
+        Self {
+            directions: 8,
+            rays_per_direction: 4,
+            steps: 8,
+        }
+    }
+}
+
+impl RayMarchParams {
+    /// The same parameters clamped into their valid ranges.
+    pub fn sanitized(&self) -> Self {
+        Self {
+            directions: self.directions.clamp(1, 64),
+            rays_per_direction: self.rays_per_direction.clamp(1, 64),
+            steps: self.steps.clamp(1, 64),
         }
     }
 }

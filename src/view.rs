@@ -172,6 +172,10 @@ pub(crate) struct DynamicAoUniform {
     pub horizon_angle_bias: f32,
     pub horizon_attenuation: f32,
     pub horizon_contrast: f32,
+    /// Ray-marched reference parameters (see [`crate::RayMarchParams`]).
+    pub ray_directions: u32,
+    pub ray_elevations: u32,
+    pub ray_steps: u32,
 }
 
 fn extract_views(
@@ -198,12 +202,15 @@ fn extract_views(
         let params = ao.quality.params();
         let blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
-        let image_space = near_field || ao.technique == AoTechnique::Horizon;
+        let image_space =
+            near_field || matches!(ao.technique, AoTechnique::Horizon | AoTechnique::RayMarch);
         let horizon = ao.horizon.sanitized();
+        let rays = ao.ray_march.sanitized();
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
-                back_layer: near_field && params.back_layer,
+                back_layer: (near_field && params.back_layer)
+                    || ao.technique == AoTechnique::RayMarch,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 debug_view: ao.debug_view,
             },
@@ -221,6 +228,9 @@ fn extract_views(
                 horizon_angle_bias: horizon.angle_bias,
                 horizon_attenuation: horizon.attenuation,
                 horizon_contrast: horizon.contrast,
+                ray_directions: rays.directions,
+                ray_elevations: rays.rays_per_direction,
+                ray_steps: rays.steps,
             },
         ));
     }

@@ -21,4 +21,8 @@ struct DynamicAoSettings {
     horizon_angle_bias: f32,
     horizon_attenuation: f32,
     horizon_contrast: f32,
+    // Ray-marched reference: directions, rays per direction, steps per ray.
+    ray_directions: u32,
+    ray_elevations: u32,
+    ray_steps: u32,
 }

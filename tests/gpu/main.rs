@@ -15,6 +15,7 @@ mod harness;
 mod horizon;
 mod lighting;
 mod near_field;
+mod ray_march;
 mod scenes;
 mod shared_assets;
 mod skinned;

@@ -1,0 +1,54 @@
+//! The ray-marched pass.
+
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    camera::ExtractedCamera,
+    diagnostic::RecordDiagnostics,
+    extract_component::DynamicUniformIndex,
+    render_resource::{ComputePassDescriptor, PipelineCache},
+    renderer::{RenderContext, ViewQuery},
+    view::ViewUniformOffset,
+};
+
+use super::pipeline::{RayMarchBindGroup, RayMarchPipeline};
+use crate::view::DynamicAoUniform;
+
+pub(crate) fn ray_march_pass(
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &RayMarchBindGroup,
+        &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
+    )>,
+    pipeline: Res<RayMarchPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (camera, bind_group, view_offset, settings_index) = view.into_inner();
+    let (Some(size), Some(compute_pipeline)) = (
+        camera.physical_viewport_size,
+        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+    ) else {
+        return;
+    };
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_ray_march");
+    let encoder = ctx.command_encoder();
+    encoder.push_debug_group("dynamic_ao_ray_march");
+    {
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("dynamic_ao_ray_march"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(compute_pipeline);
+        pass.set_bind_group(
+            0,
+            &bind_group.0,
+            &[view_offset.offset, settings_index.index()],
+        );
+        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
+    }
+    encoder.pop_debug_group();
+    time_span.end(ctx.command_encoder());
+}

@@ -1,0 +1,104 @@
+// Ray-marched ambient occlusion through both ND-buffer layers (Bavoil & Sainz 2008,
+// "Ray-Marched Ambient Occlusion"). `reference::ray_march` is the CPU twin.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::decode_normal
+#import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::settings::DynamicAoSettings
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(2) var front_depth: texture_depth_2d;
+@group(0) @binding(3) var front_normal: texture_2d<f32>;
+@group(0) @binding(4) var back_depth: texture_depth_2d;
+@group(0) @binding(5) var back_normal: texture_2d<f32>;
+@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
+
+const TAU: f32 = 6.28318530717958648;
+const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
+
+fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
+    let uv = (vec2<f32>(pixel) + 0.5) / size;
+    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+// Whether the view-space point `x` lies inside the geometry the two layers bound.
+fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
+    let clip = view.clip_from_view * vec4<f32>(x, 1.0);
+    if clip.w <= 0.0 {
+        return -1;
+    }
+    let ndc = clip.xy / clip.w;
+    let q = vec2<i32>(floor(vec2<f32>((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * size));
+    if any(q < vec2<i32>(0)) || any(q >= dims) {
+        // The ray left the screen: nothing more is known along it.
+        return -1;
+    }
+    let front = textureLoad(front_depth, q, 0);
+    if front <= 0.0 {
+        return 0;
+    }
+    let front_z = view_position(q, size, front).z;
+    // A small tolerance keeps the receiver's own surface from blocking it.
+    if x.z > front_z - 0.01 * radius {
+        return 0;
+    }
+    let back = textureLoad(back_depth, q, 0);
+    if back > 0.0 {
+        return select(0, 1, x.z > view_position(q, size, back).z);
+    }
+    return select(0, 1, front_z - x.z < radius);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn ray_march(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = vec2<i32>(textureDimensions(front_depth));
+    if i32(id.x) >= dims.x || i32(id.y) >= dims.y {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let size = vec2<f32>(dims);
+    let depth = textureLoad(front_depth, pixel, 0);
+    let world_normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
+    if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
+        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        return;
+    }
+    let p = view_position(pixel, size, depth);
+    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    // Orthonormal basis around n (Duff et al. 2017), identical on the CPU.
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t1 = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let t2 = vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+
+    let radius = settings.radius;
+    let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x2c1b3c6du));
+    let rotation = f32(hash) * HASH_TO_UNIT;
+    let jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
+    let directions = settings.ray_directions;
+    let elevations = settings.ray_elevations;
+    var hits = 0u;
+    for (var i = 0u; i < directions; i++) {
+        let phi = (f32(i) + rotation) * TAU / f32(directions);
+        for (var j = 0u; j < elevations; j++) {
+            // Cosine-weighted: sin²θ uniform in [0, 1).
+            let u = (f32(j) + jitter) / f32(elevations);
+            let sin_theta = sqrt(u);
+            let cos_theta = sqrt(1.0 - u);
+            let dir = t1 * (sin_theta * cos(phi)) + t2 * (sin_theta * sin(phi)) + n * cos_theta;
+            for (var s = 0u; s < settings.ray_steps; s++) {
+                let t = (f32(s) + 0.5) / f32(settings.ray_steps) * radius;
+                let state = blocked(p + dir * t, size, dims, radius);
+                if state != 0 {
+                    hits += u32(state == 1);
+                    break;
+                }
+            }
+        }
+    }
+    let value = settings.intensity * f32(hits) / f32(directions * elevations);
+    textureStore(occlusion, pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+}

@@ -1,0 +1,124 @@
+//! The ray-marched reference on the CPU, step for step as `ray_march/ray_march.wgsl` runs it.
+
+use bevy::math::{IVec2, Vec3, Vec4, Vec4Swizzles};
+
+use super::nd_buffer::{NdBuffer, ViewMatrices};
+use super::sampling::pcg_hash;
+
+const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
+
+/// Parameters of one evaluation, as the GPU uniform carries them.
+#[derive(Clone, Copy, Debug)]
+pub struct RayMarchInputs {
+    /// R, metres.
+    pub radius: f32,
+    /// Multiplier on the occlusion.
+    pub intensity: f32,
+    /// Azimuths per pixel.
+    pub directions: u32,
+    /// Elevations per azimuth.
+    pub rays_per_direction: u32,
+    /// Steps per ray.
+    pub steps: u32,
+}
+
+fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
+    let u = (pixel.x as f32 + 0.5) / width as f32;
+    let v = (pixel.y as f32 + 0.5) / height as f32;
+    let p = view.clip_from_view.inverse() * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
+    p.xyz() / p.w
+}
+
+/// 1 blocked, 0 free, −1 left the screen.
+fn blocked(nd: &NdBuffer, view: &ViewMatrices, x: Vec3, radius: f32) -> i32 {
+    let (w, h) = (nd.width, nd.height);
+    let clip = view.clip_from_view * x.extend(1.0);
+    if clip.w <= 0.0 {
+        return -1;
+    }
+    let ndc = clip.xy() / clip.w;
+    let q = IVec2::new(
+        ((ndc.x + 1.0) * 0.5 * w as f32).floor() as i32,
+        ((1.0 - ndc.y) * 0.5 * h as f32).floor() as i32,
+    );
+    let (Some(front), Some(back)) = (nd.texel(false, q.x, q.y), nd.texel(true, q.x, q.y)) else {
+        return -1;
+    };
+    if front.depth <= 0.0 {
+        return 0;
+    }
+    let front_z = view_position(view, q, w, h, front.depth).z;
+    if x.z > front_z - 0.01 * radius {
+        return 0;
+    }
+    if back.depth > 0.0 {
+        return i32::from(x.z > view_position(view, q, w, h, back.depth).z);
+    }
+    i32::from(front_z - x.z < radius)
+}
+
+/// Occlusion (0 = open) of every pixel, row-major.
+pub fn ray_march_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    inputs: &RayMarchInputs,
+) -> Vec<f32> {
+    (0..nd.width * nd.height)
+        .map(|i| {
+            pixel_occlusion(
+                nd,
+                view,
+                inputs,
+                (i % nd.width) as i32,
+                (i / nd.width) as i32,
+            )
+        })
+        .collect()
+}
+
+/// Occlusion of one pixel.
+pub fn pixel_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    inputs: &RayMarchInputs,
+    x: i32,
+    y: i32,
+) -> f32 {
+    let Some(texel) = nd.texel(false, x, y) else {
+        return 0.0;
+    };
+    if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
+        return 0.0;
+    }
+    let p = view_position(view, IVec2::new(x, y), nd.width, nd.height, texel.depth);
+    let n = (view.view_from_world * texel.normal.extend(0.0))
+        .xyz()
+        .normalize();
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t1 = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let t2 = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x2c1b_3c6d));
+    let rotation = hash as f32 * HASH_TO_UNIT;
+    let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
+    let mut hits = 0u32;
+    for i in 0..inputs.directions {
+        let phi = (i as f32 + rotation) * std::f32::consts::TAU / inputs.directions as f32;
+        for j in 0..inputs.rays_per_direction {
+            let u = (j as f32 + jitter) / inputs.rays_per_direction as f32;
+            let (sin_theta, cos_theta) = (u.sqrt(), (1.0 - u).sqrt());
+            let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
+            for s in 0..inputs.steps {
+                let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
+                let state = blocked(nd, view, p + dir * t, inputs.radius);
+                if state != 0 {
+                    hits += u32::from(state == 1);
+                    break;
+                }
+            }
+        }
+    }
+    let total = (inputs.directions * inputs.rays_per_direction) as f32;
+    (inputs.intensity * hits as f32 / total).clamp(0.0, 1.0)
+}

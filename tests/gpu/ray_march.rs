@@ -1,0 +1,89 @@
+//! The ray-marched reference against its CPU twin, and its error against ground truth as the
+//! ray count grows.
+
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::{
+    metrics::rmse,
+    ray_march::{RayMarchInputs, ray_march_occlusion},
+};
+
+use crate::harness::Gpu;
+use crate::scenes;
+
+#[test]
+fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
+    let radius = 0.73;
+    let scene = scenes::ball_near_wall();
+    let with = |directions, rays_per_direction| {
+        DynamicAo::default()
+            .with_technique(AoTechnique::RayMarch)
+            .with_radius(radius)
+            .with_blur(AoBlur::OFF)
+            .with_ray_march(RayMarchParams {
+                directions,
+                rays_per_direction,
+                steps: 8,
+            })
+    };
+    let mut gpu = Gpu::new(&scene, with(2, 1));
+    let first = gpu.frame(4);
+    let truth = first.ground_truth(&scene.bvh(), radius);
+    let mask = first.geometry_mask();
+
+    // The same rays on the CPU, from the read-back ND-buffer.
+    let inputs = RayMarchInputs {
+        radius,
+        intensity: 1.0,
+        directions: 2,
+        rays_per_direction: 1,
+        steps: 8,
+    };
+    let cpu: Vec<f32> = ray_march_occlusion(&first.nd, &first.view, &inputs)
+        .into_iter()
+        .map(|o| 1.0 - o)
+        .collect();
+    let mut diffs: Vec<f32> = first
+        .visibility
+        .iter()
+        .zip(&cpu)
+        .zip(&mask)
+        .filter(|(_, m)| **m)
+        .map(|((g, c), _)| (g - c).abs())
+        .collect();
+    diffs.sort_by(f32::total_cmp);
+    let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
+    let p99 = diffs[diffs.len() * 99 / 100];
+    println!("ray march GPU vs CPU: mean |diff| {mean:.5}, 99th percentile {p99:.5}");
+    // A ray whose step lands on a pixel edge can flip on one side only: one ray of two is 0.5.
+    assert!(mean < 0.01, "mean |GPU − CPU| = {mean}");
+    assert!(p99 <= 0.5 + 1e-3, "99th percentile |GPU − CPU| = {p99}");
+
+    let mut errors = vec![rmse(&first.visibility, &truth, Some(&mask))];
+    for (directions, rays) in [(4, 2), (8, 4)] {
+        gpu.set_ao(|ao| *ao = with(directions, rays));
+        let frame = gpu.frame(3);
+        errors.push(rmse(&frame.visibility, &truth, Some(&mask)));
+    }
+    println!("ray march RMSE vs ground truth at 2, 8, 32 rays per pixel: {errors:?}");
+    assert!(
+        errors.windows(2).all(|w| w[1] < w[0]),
+        "error should shrink with more rays: {errors:?}"
+    );
+    assert!(errors[2] < 0.15, "32 rays per pixel: RMSE {}", errors[2]);
+}
+
+#[test]
+fn ray_march_error_on_every_scene() {
+    let radius = 0.73;
+    for (name, scene) in scenes::all() {
+        let ao = DynamicAo::default()
+            .with_technique(AoTechnique::RayMarch)
+            .with_radius(radius);
+        let mut gpu = Gpu::new(&scene, ao);
+        let frame = gpu.frame(4);
+        let truth = frame.ground_truth(&scene.bvh(), radius);
+        let error = rmse(&frame.visibility, &truth, Some(&frame.geometry_mask()));
+        println!("{name}: ray march (8 × 4 rays × 8 steps, blurred) RMSE {error:.4}");
+        assert!(error < 0.12, "{name}: ray-march RMSE {error}");
+    }
+}
