@@ -1,7 +1,8 @@
 //! GPU time per pass, from timestamp queries, for no AO, Bevy's SSAO at each level and ours at
 //! each preset, on the same scene in the same run. Prints a Markdown table.
 //!
-//! `cargo bench --bench gpu_passes` (add `-- --width 1920 --height 1080` for another size).
+//! `cargo bench --bench gpu_passes` (add `-- --width 1920 --height 1080` for another size and
+//! `-- --frames 60` for longer measurements).
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
 
 #[path = "../examples/common/mod.rs"]
@@ -23,7 +24,6 @@ use bevy::render::{
 use bevy_dynamic_ao::prelude::*;
 
 const WARMUP_FRAMES: u32 = 10;
-const MEASURED_FRAMES: u32 = 30;
 
 #[derive(Clone)]
 enum Config {
@@ -62,6 +62,7 @@ fn main() {
             .unwrap_or(default)
     };
     let size = UVec2::new(value("--width", 640), value("--height", 480));
+    let frames = value("--frames", 30).max(1);
     let configs = [
         Config::NoAo,
         Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Low),
@@ -78,7 +79,7 @@ fn main() {
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
         .iter()
-        .map(|config| run(config, size, &mut adapter))
+        .map(|config| run(config, size, frames, &mut adapter))
         .collect();
 
     let columns = [
@@ -91,7 +92,7 @@ fn main() {
         ("dynamic_ao_compose", "compose"),
     ];
     println!(
-        "\nAdapter: {adapter}; {}×{}; mean of {MEASURED_FRAMES} frames after {WARMUP_FRAMES}.",
+        "\nAdapter: {adapter}; {}×{}; mean of {frames} frames after {WARMUP_FRAMES}.",
         size.x, size.y
     );
     println!(
@@ -116,7 +117,7 @@ fn main() {
     }
 }
 
-fn run(config: &Config, size: UVec2, adapter: &mut String) -> Row {
+fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
     let mut app = App::new();
     app.add_plugins((
         common::headless_plugins(),
@@ -151,10 +152,10 @@ fn run(config: &Config, size: UVec2, adapter: &mut String) -> Row {
         diagnostic.clear_history();
     }
     let start = Instant::now();
-    for _ in 0..MEASURED_FRAMES {
+    for _ in 0..frames {
         app.update();
     }
-    let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / MEASURED_FRAMES as f64;
+    let frame_ms = start.elapsed().as_secs_f64() * 1000.0 / frames as f64;
     let store = app.world().resource::<DiagnosticsStore>();
     let mut passes = BTreeMap::new();
     for diagnostic in store.iter() {

@@ -13,7 +13,8 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str =
     "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
-keys: Space AO on/off, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer, F blur, Esc quit";
+keys: Space AO on/off, T technique, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer,
+      F blur, Esc quit";
 
 fn main() {
     let args = ExampleArgs::parse(USAGE);
@@ -138,6 +139,13 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
                 _ => AoTechnique::BevySsao,
             };
         }
+        if keys.just_pressed(KeyCode::KeyT) {
+            ao.technique = match ao.technique {
+                AoTechnique::NearField => AoTechnique::Horizon,
+                AoTechnique::Horizon => AoTechnique::RayMarch,
+                _ => AoTechnique::NearField,
+            };
+        }
         if keys.just_pressed(KeyCode::KeyF) {
             ao.blur = if ao.blur.radius == 0 {
                 AoBlur::default()
@@ -176,7 +184,7 @@ fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<Hel
     let params = ao.quality.params();
     text.0 = format!(
         "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | blur {} px | debug view {}\n\
-         Space AO on/off  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  Esc quit",
+         Space AO on/off  T technique  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  Esc quit",
         ao.technique.name(),
         ao.quality.name(),
         params.max_samples,
