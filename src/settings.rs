@@ -171,7 +171,7 @@ pub enum AoTechnique {
     /// Image-space near-field AO from the two-layer ND-buffer (Shanmugam & Arikan 2007, §4).
     #[default]
     NearField,
-    /// Horizon-based AO on the front layer (Bavoil & Sainz 2008), normal-quality mode.
+    /// Horizon-based AO on the front layer (Bavoil & Sainz 2008).
     Horizon,
     /// Brute-force rays marched through both ND-buffer layers: the in-engine reference.
     RayMarch,
@@ -204,8 +204,7 @@ impl AoTechnique {
     }
 }
 
-/// Parameters of horizon-based AO (Bavoil & Sainz 2008, "Horizon-Based Ambient Occlusion"),
-/// normal-quality mode: the horizon is integrated over the hemisphere around the per-pixel normal.
+/// Parameters of horizon-based AO (Bavoil & Sainz 2008, "Horizon-Based Ambient Occlusion").
 /// The radius is [`DynamicAo::radius`].
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
@@ -223,6 +222,40 @@ pub struct HorizonParams {
     pub attenuation: f32,
     /// Scale on the integrated occlusion. No unit. Valid: ≥ 0. Default: 1.
     pub contrast: f32,
+    /// Which of the whitepaper's three modes. Default: [`HorizonMode::Normal`].
+    pub mode: HorizonMode,
+}
+
+/// The three modes of horizon-based AO (Bavoil & Sainz 2008).
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[reflect(Default, Clone, Debug, PartialEq, Hash)]
+pub enum HorizonMode {
+    /// No normals: the horizon is integrated over the whole sphere (from straight down) and the
+    /// lower half, one unit of W0 per direction, is subtracted.
+    Low,
+    /// The hemisphere around the per-pixel normal: each direction starts at the elevation of the
+    /// tangent plane.
+    #[default]
+    Normal,
+    /// As `Normal`, with a more accurate starting horizon and less banding: each direction starts
+    /// at the higher of the tangent plane and the surface one pixel away along it (the depth
+    /// buffer's own tangent, which hides the facets of coarse meshes), and the step offsets are
+    /// jittered per direction rather than per pixel.
+    High,
+}
+
+impl HorizonMode {
+    /// Every mode, from cheapest to most accurate.
+    pub const ALL: [HorizonMode; 3] = [HorizonMode::Low, HorizonMode::Normal, HorizonMode::High];
+
+    /// The value the shaders and `reference::horizon` take: 0 low, 1 normal, 2 high.
+    pub fn shader_index(self) -> u32 {
+        match self {
+            HorizonMode::Low => 0,
+            HorizonMode::Normal => 1,
+            HorizonMode::High => 2,
+        }
+    }
 }
 
 impl Default for HorizonParams {
@@ -233,6 +266,7 @@ impl Default for HorizonParams {
             angle_bias: 0.1,
             attenuation: 1.0,
             contrast: 1.0,
+            mode: HorizonMode::Normal,
         }
     }
 }
@@ -254,6 +288,7 @@ impl HorizonParams {
             angle_bias: valid(self.angle_bias, 1.5, d.angle_bias),
             attenuation: valid(self.attenuation, f32::MAX, d.attenuation),
             contrast: valid(self.contrast, f32::MAX, d.contrast),
+            mode: self.mode,
         }
     }
 }

@@ -172,6 +172,7 @@ pub(crate) struct DynamicAoUniform {
     pub horizon_angle_bias: f32,
     pub horizon_attenuation: f32,
     pub horizon_contrast: f32,
+    pub horizon_mode: u32,
     /// Ray-marched reference parameters (see [`crate::RayMarchParams`]).
     pub ray_directions: u32,
     pub ray_elevations: u32,
@@ -228,6 +229,7 @@ fn extract_views(
                 horizon_angle_bias: horizon.angle_bias,
                 horizon_attenuation: horizon.attenuation,
                 horizon_contrast: horizon.contrast,
+                horizon_mode: horizon.mode.shader_index(),
                 ray_directions: rays.directions,
                 ray_elevations: rays.rays_per_direction,
                 ray_steps: rays.steps,

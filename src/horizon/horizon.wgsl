@@ -1,5 +1,8 @@
-// Horizon-based ambient occlusion, Bavoil & Sainz 2008, normal-quality mode: per image-space
-// direction, the rise of the horizon above the tangent plane, attenuated by W0 · (1 − (r/R)²).
+// Horizon-based ambient occlusion, Bavoil & Sainz 2008: per image-space direction, the rise of the
+// horizon above a starting elevation, attenuated by W0 · (1 − (r/R)²). Modes (`HorizonMode`):
+// 0 low (no normals: from straight down, minus one W0 per direction), 1 normal (from the tangent
+// plane), 2 high (from the higher of the tangent plane and the surface one pixel away, with
+// per-direction jitter).
 // `reference::horizon` is the CPU twin; keep the two in step.
 
 #import bevy_render::view::View
@@ -48,8 +51,9 @@ fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
     let step_px = radius_px / f32(steps);
     let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x68bc21ebu));
     let rotation = f32(hash) * HASH_TO_UNIT;
-    let jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
+    let pixel_jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
     let directions = settings.horizon_directions;
+    let mode = settings.horizon_mode;
 
     var sum = 0.0;
     for (var i = 0u; i < directions; i++) {
@@ -61,6 +65,23 @@ fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
         let tangent = along - n * dot(n, along);
         let sin_tangent = clamp(tangent.z / max(length(tangent), 1e-6), -1.0, 1.0);
         var sin_horizon = sin(min(asin(sin_tangent) + settings.horizon_angle_bias, HALF_PI));
+        var jitter = pixel_jitter;
+        if mode == 0u {
+            sin_horizon = -1.0;
+        } else if mode == 2u {
+            jitter = f32(pcg_hash(hash ^ ((i + 1u) * 0x9e3779b9u))) * HASH_TO_UNIT;
+            let q = pixel + vec2<i32>(floor(dir + 0.5));
+            if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(dims)) && any(q != pixel) {
+                let dq = textureLoad(depth_texture, q, 0);
+                if dq > 0.0 {
+                    let v = view_position(q, size, dq) - p;
+                    let r = length(v);
+                    if r > 0.0 && r < radius {
+                        sin_horizon = max(sin_horizon, v.z / r);
+                    }
+                }
+            }
+        }
         var ao = 0.0;
         for (var k = 0u; k < steps; k++) {
             let offset = dir * ((f32(k) + jitter) * step_px + 1.0);
@@ -83,6 +104,10 @@ fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
                 ao += settings.horizon_attenuation * (1.0 - x * x) * (sin_elevation - sin_horizon);
                 sin_horizon = sin_elevation;
             }
+        }
+        if mode == 0u {
+            // The lower half of the sphere, below the unknown tangent plane.
+            ao -= settings.horizon_attenuation;
         }
         sum += ao;
     }

@@ -1,5 +1,4 @@
-//! Horizon-based ambient occlusion, Bavoil & Sainz 2008 ("Horizon-Based Ambient Occlusion"),
-//! normal-quality mode.
+//! Horizon-based ambient occlusion, Bavoil & Sainz 2008 ("Horizon-Based Ambient Occlusion").
 //!
 //! The front layer of the ND-buffer is read as a heightfield seen from the camera. For each of
 //! a few image-space directions around a pixel (randomly rotated per pixel), the pass steps
@@ -9,7 +8,8 @@
 //! t of the tangent plane (raised by the angle bias). W(x) = 1 − x². The mean over directions,
 //! times the contrast, is the occlusion. `reference::horizon` is the CPU twin.
 //!
-//! The low-quality (no normals) and high-quality modes of the whitepaper are not implemented yet.
+//! The whitepaper's low and high modes are named there but not spelled out; what they do here is
+//! documented on [`HorizonMode`](crate::settings::HorizonMode).
 
 mod node;
 mod pipeline;

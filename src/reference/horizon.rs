@@ -1,4 +1,4 @@
-//! Horizon-based occlusion (Bavoil & Sainz 2008, normal-quality mode) on the CPU, step for
+//! Horizon-based occlusion (Bavoil & Sainz 2008, all three modes) on the CPU, step for
 //! step as `horizon/horizon.wgsl` computes it.
 
 use bevy::math::{IVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
@@ -25,6 +25,8 @@ pub struct HorizonInputs {
     pub attenuation: f32,
     /// Contrast.
     pub contrast: f32,
+    /// 0 low, 1 normal, 2 high (`HorizonMode::shader_index`).
+    pub mode: u32,
 }
 
 fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
@@ -74,7 +76,7 @@ pub fn pixel_occlusion(
     let step_px = radius_px / steps as f32;
     let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x68bc_21eb));
     let rotation = hash as f32 * HASH_TO_UNIT;
-    let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
+    let pixel_jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
 
     let mut sum = 0.0;
     for i in 0..inputs.directions {
@@ -86,6 +88,23 @@ pub fn pixel_occlusion(
         let mut sin_horizon = (sin_tangent.asin() + inputs.angle_bias)
             .min(std::f32::consts::FRAC_PI_2)
             .sin();
+        let mut jitter = pixel_jitter;
+        if inputs.mode == 0 {
+            sin_horizon = -1.0;
+        } else if inputs.mode == 2 {
+            jitter = pcg_hash(hash ^ (i + 1).wrapping_mul(0x9e37_79b9)) as f32 * HASH_TO_UNIT;
+            let q = pixel + (dir + 0.5).floor().as_ivec2();
+            if q != pixel
+                && let Some(t) = nd.texel(false, q.x, q.y)
+                && t.depth > 0.0
+            {
+                let v = view_position(view, q, w, h, t.depth) - p;
+                let r = v.length();
+                if r > 0.0 && r < inputs.radius {
+                    sin_horizon = sin_horizon.max(v.z / r);
+                }
+            }
+        }
         let mut ao = 0.0;
         for k in 0..steps {
             let offset = dir * ((k as f32 + jitter) * step_px + 1.0);
@@ -110,6 +129,9 @@ pub fn pixel_occlusion(
                 ao += inputs.attenuation * (1.0 - x * x) * (sin_elevation - sin_horizon);
                 sin_horizon = sin_elevation;
             }
+        }
+        if inputs.mode == 0 {
+            ao -= inputs.attenuation;
         }
         sum += ao;
     }

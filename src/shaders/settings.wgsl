@@ -21,6 +21,8 @@ struct DynamicAoSettings {
     horizon_angle_bias: f32,
     horizon_attenuation: f32,
     horizon_contrast: f32,
+    // 0 low, 1 normal, 2 high.
+    horizon_mode: u32,
     // Ray-marched reference: directions, rays per direction, steps per ray.
     ray_directions: u32,
     ray_elevations: u32,
