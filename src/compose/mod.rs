@@ -23,8 +23,12 @@ use bevy::render::{
     render_resource::{PipelineCache, SpecializedRenderPipelines},
 };
 
+use crate::filter::BlurPipelines;
+use crate::horizon::HorizonPipeline;
 use crate::near_field::NearFieldPipeline;
+use crate::ray_march::RayMarchPipeline;
 use crate::schedule::DynamicAoSystems;
+use crate::settings::AoTechnique;
 use crate::view::DynamicAoView;
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
@@ -49,7 +53,7 @@ impl Plugin for ComposePlugin {
                 (
                     debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
                     // Bevy inserts `SsaoPipelineId` during `Prepare`; its pass needs it.
-                    disable_bevy_ssao
+                    hand_over_from_bevy_ssao
                         .after(RenderSystems::Prepare)
                         .before(RenderSystems::Render),
                     (
@@ -69,28 +73,42 @@ impl Plugin for ComposePlugin {
     }
 }
 
+/// Marks a view whose passes have all compiled: from then on ours write the AO texture, not
+/// Bevy's SSAO.
+#[derive(Component)]
+pub(crate) struct AoPassesReady;
+
 /// Bevy's SSAO pass only runs on views that carry its pipeline id; taking it away hands the
-/// texture to us. Until our pipelines have compiled, Bevy's pass keeps running, so the image
-/// never goes without AO or black.
-fn disable_bevy_ssao(
+/// texture to us. Until every pass the view needs has compiled (pipelines compile in the
+/// background over several frames), Bevy's pass keeps running and ours stays off, so the image
+/// never shows an unwritten texture.
+fn hand_over_from_bevy_ssao(
     mut commands: Commands,
     pipeline_cache: Res<PipelineCache>,
     near_field: Res<NearFieldPipeline>,
+    horizon: Res<HorizonPipeline>,
+    ray_march: Res<RayMarchPipeline>,
+    blur: Res<BlurPipelines>,
     compose: Res<pipeline::ComposePipeline>,
-    views: Query<(Entity, &DynamicAoView), With<SsaoPipelineId>>,
+    views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
 ) {
-    let ready = pipeline_cache
-        .get_compute_pipeline(near_field.pipeline)
-        .is_some()
-        && pipeline_cache
-            .get_compute_pipeline(compose.pipeline)
-            .is_some();
-    if !ready {
-        return;
-    }
-    for (entity, view) in &views {
-        if view.replaces_bevy_ssao() {
-            commands.entity(entity).remove::<SsaoPipelineId>();
+    let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
+    for (entity, view, bevy_ssao) in &views {
+        let technique = match view.technique {
+            AoTechnique::NearField => ready(near_field.pipeline),
+            AoTechnique::Horizon => ready(horizon.pipeline),
+            AoTechnique::RayMarch => ready(ray_march.pipeline),
+            AoTechnique::Off => true,
+            AoTechnique::BevySsao => false,
+        };
+        let filter = view.blur_radius == 0 || (ready(blur.x) && ready(blur.y));
+        if technique && filter && ready(compose.pipeline) {
+            commands.entity(entity).insert(AoPassesReady);
+            if bevy_ssao {
+                commands.entity(entity).remove::<SsaoPipelineId>();
+            }
+        } else {
+            commands.entity(entity).remove::<AoPassesReady>();
         }
     }
 }

@@ -10,6 +10,7 @@ use bevy::render::{
     view::ViewTarget,
 };
 
+use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
 use crate::view::{DynamicAoUniform, DynamicAoView};
@@ -20,13 +21,15 @@ pub(crate) fn compose_pass(
         &DynamicAoView,
         &ComposeBindGroup,
         &DynamicUniformIndex<DynamicAoUniform>,
+        Has<AoPassesReady>,
     )>,
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, ao_view, bind_group, settings_index) = view.into_inner();
-    if !ao_view.replaces_bevy_ssao() {
+    let (camera, ao_view, bind_group, settings_index, ready) = view.into_inner();
+    // Until every pass of the view has compiled, Bevy's SSAO still writes the texture.
+    if !ao_view.replaces_bevy_ssao() || !ready {
         return;
     }
     let (Some(size), Some(compute_pipeline)) = (

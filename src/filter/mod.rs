@@ -18,6 +18,8 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
 
 use crate::schedule::DynamicAoSystems;
 
+pub(crate) use pipeline::BlurPipelines;
+
 /// Registers the blur pipelines and passes.
 pub struct FilterPlugin;
 

@@ -22,6 +22,8 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
 
 use crate::schedule::DynamicAoSystems;
 
+pub(crate) use pipeline::HorizonPipeline;
+
 /// Registers the horizon-based pipeline and pass.
 pub struct HorizonPlugin;
 

@@ -20,6 +20,8 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
 
 use crate::schedule::DynamicAoSystems;
 
+pub(crate) use pipeline::RayMarchPipeline;
+
 /// Registers the ray-marched pipeline and pass.
 pub struct RayMarchPlugin;
 

@@ -122,11 +122,23 @@ impl Gpu {
 
     /// Like [`Gpu::new`], loading assets from `folder` instead of the crate's `assets/`.
     pub fn with_asset_folder(scene: &SceneSpec, ao: DynamicAo, folder: Option<&str>) -> Self {
+        Self::build(scene, ao, folder, true)
+    }
+
+    /// Like [`Gpu::new`], with pipelines compiling in the background as in a normal app.
+    pub fn with_background_compilation(scene: &SceneSpec, ao: DynamicAo) -> Self {
+        Self::build(scene, ao, None, false)
+    }
+
+    fn build(scene: &SceneSpec, ao: DynamicAo, folder: Option<&str>, synchronous: bool) -> Self {
         let turn = GPU_TURN
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         let mut app = App::new();
-        let plugins = common::headless_plugins();
+        let plugins = common::headless_plugins().set(bevy::render::RenderPlugin {
+            synchronous_pipeline_compilation: synchronous,
+            ..default()
+        });
         match folder {
             Some(folder) => app.add_plugins((
                 plugins.set(bevy::asset::AssetPlugin {
