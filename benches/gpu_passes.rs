@@ -32,6 +32,7 @@ enum Config {
     Ours(AoQuality),
     Horizon,
     RayMarch,
+    HalfResolution,
 }
 
 impl Config {
@@ -42,6 +43,7 @@ impl Config {
             Config::Ours(quality) => format!("near-field {}", quality.name()),
             Config::Horizon => "horizon (8 directions × 8 steps)".into(),
             Config::RayMarch => "ray march (8 × 4 rays × 8 steps)".into(),
+            Config::HalfResolution => "near-field high, half resolution".into(),
         }
     }
 }
@@ -75,6 +77,7 @@ fn main() {
         Config::Ours(AoQuality::Ultra),
         Config::Horizon,
         Config::RayMarch,
+        Config::HalfResolution,
     ];
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
@@ -88,6 +91,7 @@ fn main() {
         ("dynamic_ao_near_field", "near field"),
         ("dynamic_ao_horizon", "horizon"),
         ("dynamic_ao_ray_march", "ray march"),
+        ("dynamic_ao_upsample", "upsample"),
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_compose", "compose"),
     ];
@@ -208,6 +212,12 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
         }
         Config::RayMarch => {
             camera.insert(DynamicAo::default().with_technique(AoTechnique::RayMarch));
+        }
+        Config::HalfResolution => {
+            camera.insert(DynamicAo {
+                half_resolution: true,
+                ..default()
+            });
         }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();

@@ -44,6 +44,10 @@ pub struct DynamicAo {
     pub ray_march: RayMarchParams,
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
+    /// Compute the occlusion at half resolution in each axis and bring it back to full
+    /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
+    /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `false`.
+    pub half_resolution: bool,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -59,6 +63,7 @@ impl Default for DynamicAo {
             horizon: HorizonParams::default(),
             ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
+            half_resolution: false,
             debug_view: false,
         }
     }

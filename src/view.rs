@@ -140,6 +140,8 @@ pub(crate) struct DynamicAoView {
     pub back_layer: bool,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
+    /// Occlusion computed at half resolution and upsampled.
+    pub half_resolution: bool,
     pub debug_view: bool,
 }
 
@@ -177,6 +179,8 @@ pub(crate) struct DynamicAoUniform {
     pub ray_directions: u32,
     pub ray_elevations: u32,
     pub ray_steps: u32,
+    /// 1 at full resolution, 2 at half resolution.
+    pub resolution_scale: u32,
 }
 
 fn extract_views(
@@ -213,6 +217,7 @@ fn extract_views(
                 back_layer: (near_field && params.back_layer)
                     || ao.technique == AoTechnique::RayMarch,
                 blur_radius: if image_space { blur.radius } else { 0 },
+                half_resolution: image_space && ao.half_resolution,
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -233,6 +238,7 @@ fn extract_views(
                 ray_directions: rays.directions,
                 ray_elevations: rays.rays_per_direction,
                 ray_steps: rays.steps,
+                resolution_scale: if ao.half_resolution { 2 } else { 1 },
             },
         ));
     }
@@ -243,7 +249,11 @@ fn extract_views(
 pub(crate) struct DynamicAoTextures {
     pub back_depth: CachedTexture,
     pub back_normal: CachedTexture,
+    /// What the technique pass writes: full size, or half size at half resolution.
     pub near_occlusion: CachedTexture,
+    /// Full-size occlusion the blur and compose read: `near_occlusion` itself, or its joint
+    /// bilateral upsampling at half resolution.
+    pub full_occlusion: CachedTexture,
     /// Between the two passes of the blur.
     pub blur_scratch: CachedTexture,
 }
@@ -252,9 +262,9 @@ fn prepare_view_textures(
     mut commands: Commands,
     mut texture_cache: ResMut<TextureCache>,
     render_device: Res<RenderDevice>,
-    views: Query<(Entity, &ExtractedCamera), With<DynamicAoView>>,
+    views: Query<(Entity, &ExtractedCamera, &DynamicAoView)>,
 ) {
-    for (entity, camera) in &views {
+    for (entity, camera, view) in &views {
         let Some(size) = camera
             .physical_viewport_size
             .filter(|size| size.x > 0 && size.y > 0)
@@ -262,8 +272,8 @@ fn prepare_view_textures(
             commands.entity(entity).remove::<DynamicAoTextures>();
             continue;
         };
-        let size = size.to_extents();
-        let mut texture = |label, format, usage| {
+        let full = size.to_extents();
+        let mut texture = |label, size, format, usage| {
             texture_cache.get(
                 &render_device,
                 TextureDescriptor {
@@ -279,19 +289,28 @@ fn prepare_view_textures(
             )
         };
         let attachment = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
+        let storage = TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING;
+        let near_occlusion = if view.half_resolution {
+            texture(
+                "dynamic_ao_half_occlusion",
+                ((size + 1) / 2).to_extents(),
+                OCCLUSION_FORMAT,
+                storage,
+            )
+        } else {
+            texture("dynamic_ao_near_occlusion", full, OCCLUSION_FORMAT, storage)
+        };
+        let full_occlusion = if view.half_resolution {
+            texture("dynamic_ao_full_occlusion", full, OCCLUSION_FORMAT, storage)
+        } else {
+            near_occlusion.clone()
+        };
         commands.entity(entity).insert(DynamicAoTextures {
-            back_depth: texture("dynamic_ao_back_depth", DEPTH_FORMAT, attachment),
-            back_normal: texture("dynamic_ao_back_normal", NORMAL_FORMAT, attachment),
-            near_occlusion: texture(
-                "dynamic_ao_near_occlusion",
-                OCCLUSION_FORMAT,
-                TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
-            ),
-            blur_scratch: texture(
-                "dynamic_ao_blur_scratch",
-                OCCLUSION_FORMAT,
-                TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
-            ),
+            back_depth: texture("dynamic_ao_back_depth", full, DEPTH_FORMAT, attachment),
+            back_normal: texture("dynamic_ao_back_normal", full, NORMAL_FORMAT, attachment),
+            near_occlusion,
+            full_occlusion,
+            blur_scratch: texture("dynamic_ao_blur_scratch", full, OCCLUSION_FORMAT, storage),
         });
     }
 }

@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+//!     [--half-res] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique list` prints the technique names. Bevy's own SSAO (`bevy-ssao`) has a radius
@@ -170,6 +170,7 @@ fn scene_ready(
                 radius: options.blur,
                 ..default()
             },
+            half_resolution: options.half_resolution,
             ..default()
         },
         readback.clone(),

@@ -7,8 +7,8 @@ use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique};
 use crate::common::parse_number;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--frames N] \
-[--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] \
+[--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -26,6 +26,8 @@ pub struct Options {
     pub preset: AoQuality,
     /// Half-width of the cross-bilateral blur, pixels (0 = off).
     pub blur: u32,
+    /// Compute the occlusion at half resolution and upsample it.
+    pub half_resolution: bool,
     /// Frames rendered after the scene is posed, before the capture.
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
@@ -41,6 +43,7 @@ impl Options {
             (None, None, None, None, None);
         let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
+        let mut half_resolution = false;
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -78,6 +81,7 @@ impl Options {
                         "unknown preset '{name}' (known: low, medium, high, ultra)"
                     ))?;
                 }
+                "--half-res" => half_resolution = true,
                 "--frames" => frames = parse_number("--frames", &value()?, 1u32)?,
                 "--blur" => {
                     blur = parse_number("--blur", &value()?, 0u32)?;
@@ -127,6 +131,7 @@ impl Options {
             technique: technique.ok_or_else(|| missing("--technique"))?,
             preset,
             blur,
+            half_resolution,
             frames,
             time,
             out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,

@@ -14,7 +14,7 @@ use common::{ExampleArgs, HelpLine};
 const USAGE: &str =
     "usage: basic [--headless] [--frames N] [--out FILE.png] [--width W] [--height H]
 keys: Space AO on/off, T technique, B Bevy's SSAO, D debug view, 1-4 presets, L back-face layer,
-      F blur, Esc quit";
+      F blur, H half resolution, Esc quit";
 
 fn main() {
     let args = ExampleArgs::parse(USAGE);
@@ -146,6 +146,9 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
                 _ => AoTechnique::NearField,
             };
         }
+        if keys.just_pressed(KeyCode::KeyH) {
+            ao.half_resolution = !ao.half_resolution;
+        }
         if keys.just_pressed(KeyCode::KeyF) {
             ao.blur = if ao.blur.radius == 0 {
                 AoBlur::default()
@@ -183,14 +186,15 @@ fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<Hel
     };
     let params = ao.quality.params();
     text.0 = format!(
-        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | blur {} px | debug view {}\n\
-         Space AO on/off  T technique  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  Esc quit",
+        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | blur {} px | half res {} | debug view {}\n\
+         Space AO on/off  T technique  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  H half res  Esc quit",
         ao.technique.name(),
         ao.quality.name(),
         params.max_samples,
         if params.back_layer { "on" } else { "off" },
         ao.radius,
         ao.blur.radius,
+        if ao.half_resolution { "on" } else { "off" },
         if ao.debug_view { "on" } else { "off" },
     );
 }

@@ -101,7 +101,8 @@ fn hand_over_from_bevy_ssao(
             AoTechnique::Off => true,
             AoTechnique::BevySsao => false,
         };
-        let filter = view.blur_radius == 0 || (ready(blur.x) && ready(blur.y));
+        let filter = (view.blur_radius == 0 || (ready(blur.x) && ready(blur.y)))
+            && (!view.half_resolution || ready(blur.upsample));
         if technique && filter && ready(compose.pipeline) {
             commands.entity(entity).insert(AoPassesReady);
             if bevy_ssao {

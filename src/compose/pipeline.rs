@@ -93,7 +93,7 @@ pub(crate) fn prepare_compose_bind_groups(
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
             &BindGroupEntries::sequential((
                 settings_binding.clone(),
-                &textures.near_occlusion.default_view,
+                &textures.full_occlusion.default_view,
                 &ssao.screen_space_ambient_occlusion_texture.default_view,
             )),
         );

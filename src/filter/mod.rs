@@ -1,5 +1,12 @@
 //! Filtering of the occlusion buffer.
 //!
+//! At half resolution, a joint bilateral upsampling first brings the occlusion back to full
+//! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the 3×3
+//! low-resolution texels around it with the product of Wendland kernels (eq. 3) over screen
+//! distance (support 4 pixels), normal difference 1 − n(x)·n(y) (support 2; the paper prints
+//! 1 + n(x)·n(y), which would favour opposite normals), world distance (support R) and AO
+//! difference (support 1).
+//!
 //! A separable cross-bilateral blur (Bavoil & Sainz 2008, "Cross Bilateral Filter"): one pass
 //! along X into a scratch texture, one along Y back into the occlusion buffer. Each tap is
 //! weighted by a Gaussian of its pixel distance and by exp(−(sharpness · Δz / z)²), where Δz is
@@ -26,6 +33,7 @@ pub struct FilterPlugin;
 impl Plugin for FilterPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "blur.wgsl");
+        embedded_asset!(app, "upsample.wgsl");
     }
 
     fn finish(&self, app: &mut App) {
@@ -38,6 +46,11 @@ impl Plugin for FilterPlugin {
                 Render,
                 pipeline::prepare_blur_bind_groups.in_set(RenderSystems::PrepareBindGroups),
             )
-            .add_systems(Core3d, node::blur_pass.in_set(DynamicAoSystems::Filter));
+            .add_systems(
+                Core3d,
+                (node::upsample_pass, node::blur_pass)
+                    .chain()
+                    .in_set(DynamicAoSystems::Filter),
+            );
     }
 }

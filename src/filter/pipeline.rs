@@ -21,6 +21,8 @@ pub(crate) struct BlurPipelines {
     layout: BindGroupLayoutDescriptor,
     pub x: CachedComputePipelineId,
     pub y: CachedComputePipelineId,
+    upsample_layout: BindGroupLayoutDescriptor,
+    pub upsample: CachedComputePipelineId,
 }
 
 impl FromWorld for BlurPipelines {
@@ -51,7 +53,33 @@ impl FromWorld for BlurPipelines {
         };
         let x = pipeline("dynamic_ao_blur_x_pipeline", "blur_x");
         let y = pipeline("dynamic_ao_blur_y_pipeline", "blur_y");
-        Self { layout, x, y }
+        let upsample_layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_upsample_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    uniform_buffer::<DynamicAoUniform>(true),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
+                ),
+            ),
+        );
+        let upsample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_upsample_pipeline".into()),
+            layout: vec![upsample_layout.clone()],
+            shader: load_embedded_asset!(world, "upsample.wgsl"),
+            ..default()
+        });
+        Self {
+            layout,
+            x,
+            y,
+            upsample_layout,
+            upsample,
+        }
     }
 }
 
@@ -61,6 +89,10 @@ pub(crate) struct BlurBindGroups {
     pub x: BindGroup,
     pub y: BindGroup,
 }
+
+/// Half-size occlusion → full-size occlusion.
+#[derive(Component)]
+pub(crate) struct UpsampleBindGroup(pub BindGroup);
 
 pub(crate) fn prepare_blur_bind_groups(
     mut commands: Commands,
@@ -82,7 +114,34 @@ pub(crate) fn prepare_blur_bind_groups(
         return;
     };
     let layout = pipeline_cache.get_bind_group_layout(&pipelines.layout);
+    let upsample_layout = pipeline_cache.get_bind_group_layout(&pipelines.upsample_layout);
     for (entity, textures, prepass, view) in &views {
+        match (
+            prepass.depth_view(),
+            prepass.normal_view(),
+            view.half_resolution,
+        ) {
+            (Some(depth), Some(normal), true) => {
+                let bind_group = render_device.create_bind_group(
+                    "dynamic_ao_upsample_bind_group",
+                    &upsample_layout,
+                    &BindGroupEntries::sequential((
+                        view_binding.clone(),
+                        settings_binding.clone(),
+                        depth,
+                        normal,
+                        &textures.near_occlusion.default_view,
+                        &textures.full_occlusion.default_view,
+                    )),
+                );
+                commands
+                    .entity(entity)
+                    .insert(UpsampleBindGroup(bind_group));
+            }
+            _ => {
+                commands.entity(entity).remove::<UpsampleBindGroup>();
+            }
+        }
         let Some(depth) = prepass.depth_view().filter(|_| view.blur_radius > 0) else {
             commands.entity(entity).remove::<BlurBindGroups>();
             continue;
@@ -100,7 +159,7 @@ pub(crate) fn prepare_blur_bind_groups(
                 )),
             )
         };
-        let occlusion = &textures.near_occlusion.default_view;
+        let occlusion = &textures.full_occlusion.default_view;
         let scratch = &textures.blur_scratch.default_view;
         commands.entity(entity).insert(BlurBindGroups {
             x: bind_group("dynamic_ao_blur_x_bind_group", occlusion, scratch),

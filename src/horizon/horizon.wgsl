@@ -29,7 +29,11 @@ fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
+fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
+    // At half resolution each invocation computes the full-resolution pixel at twice its index
+    // and writes one texel of the half-size buffer.
+    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
+    let out_pixel = vec2<i32>(invocation.xy);
     let dims = textureDimensions(depth_texture);
     if id.x >= dims.x || id.y >= dims.y {
         return;
@@ -39,7 +43,7 @@ fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = textureLoad(depth_texture, pixel, 0);
     let world_normal = decode_normal(textureLoad(normal_texture, pixel, 0).xyz);
     if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
-        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
         return;
     }
     let p = view_position(pixel, size, depth);
@@ -112,5 +116,5 @@ fn horizon(@builtin(global_invocation_id) id: vec3<u32>) {
         sum += ao;
     }
     let value = settings.horizon_contrast * settings.intensity * sum / f32(directions);
-    textureStore(occlusion, pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    textureStore(occlusion, out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
 }

@@ -51,7 +51,11 @@ fn occluder(
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn near_field(@builtin(global_invocation_id) id: vec3<u32>) {
+fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
+    // At half resolution each invocation computes the full-resolution pixel at twice its index
+    // and writes one texel of the half-size buffer.
+    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
+    let out_pixel = vec2<i32>(invocation.xy);
     let dims = textureDimensions(front_depth);
     if id.x >= dims.x || id.y >= dims.y {
         return;
@@ -61,7 +65,7 @@ fn near_field(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = textureLoad(front_depth, pixel, 0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || dot(n, n) == 0.0 {
-        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
         return;
     }
     let p = world_position(view, pixel, size, depth);
@@ -90,5 +94,5 @@ fn near_field(@builtin(global_invocation_id) id: vec3<u32>) {
                 textureLoad(back_normal, q, 0).xyz, size, p, n, sphere_scale);
         }
     }
-    textureStore(occlusion, pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
+    textureStore(occlusion, out_pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
 }

@@ -30,6 +30,7 @@ pub(crate) fn near_field_pass(
     if ao_view.technique != AoTechnique::NearField {
         return;
     }
+    let scale = if ao_view.half_resolution { 2 } else { 1 };
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
         pipeline_cache.get_compute_pipeline(pipeline.pipeline),
@@ -53,7 +54,9 @@ pub(crate) fn near_field_pass(
             &bind_group.0,
             &[view_offset.offset, settings_index.index()],
         );
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
+        // One invocation per texel of the occlusion buffer (half size at half resolution).
+        let texels = (size + (scale - 1)) / scale;
+        pass.dispatch_workgroups(texels.x.div_ceil(8), texels.y.div_ceil(8), 1);
     }
     encoder.pop_debug_group();
     time_span.end(ctx.command_encoder());

@@ -11,12 +11,13 @@ use bevy::render::{
 };
 
 use super::pipeline::{RayMarchBindGroup, RayMarchPipeline};
-use crate::view::DynamicAoUniform;
+use crate::view::{DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn ray_march_pass(
     view: ViewQuery<(
         &ExtractedCamera,
         &RayMarchBindGroup,
+        &DynamicAoView,
         &ViewUniformOffset,
         &DynamicUniformIndex<DynamicAoUniform>,
     )>,
@@ -24,7 +25,8 @@ pub(crate) fn ray_march_pass(
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, bind_group, view_offset, settings_index) = view.into_inner();
+    let (camera, bind_group, ao_view, view_offset, settings_index) = view.into_inner();
+    let scale = if ao_view.half_resolution { 2 } else { 1 };
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
         pipeline_cache.get_compute_pipeline(pipeline.pipeline),
@@ -47,7 +49,9 @@ pub(crate) fn ray_march_pass(
             &bind_group.0,
             &[view_offset.offset, settings_index.index()],
         );
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
+        // One invocation per texel of the occlusion buffer (half size at half resolution).
+        let texels = (size + (scale - 1)) / scale;
+        pass.dispatch_workgroups(texels.x.div_ceil(8), texels.y.div_ceil(8), 1);
     }
     encoder.pop_debug_group();
     time_span.end(ctx.command_encoder());

@@ -52,7 +52,11 @@ fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn ray_march(@builtin(global_invocation_id) id: vec3<u32>) {
+fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
+    // At half resolution each invocation computes the full-resolution pixel at twice its index
+    // and writes one texel of the half-size buffer.
+    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
+    let out_pixel = vec2<i32>(invocation.xy);
     let dims = vec2<i32>(textureDimensions(front_depth));
     if i32(id.x) >= dims.x || i32(id.y) >= dims.y {
         return;
@@ -62,7 +66,7 @@ fn ray_march(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = textureLoad(front_depth, pixel, 0);
     let world_normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
-        textureStore(occlusion, pixel, vec4<f32>(0.0));
+        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
         return;
     }
     let p = view_position(pixel, size, depth);
@@ -100,5 +104,5 @@ fn ray_march(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let value = settings.intensity * f32(hits) / f32(directions * elevations);
-    textureStore(occlusion, pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    textureStore(occlusion, out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
 }

@@ -10,6 +10,67 @@ pub fn linear_depth(view: &ViewMatrices, depth: f32) -> f32 {
     -p.z / p.w
 }
 
+/// Wendland's compactly supported kernel (Reinbothe et al. 2009, eq. 3).
+pub fn wendland(t: f32, h: f32) -> f32 {
+    if t > h {
+        return 0.0;
+    }
+    let s = 1.0 - t / h;
+    s * s * s * s * (4.0 * t / h + 1.0)
+}
+
+/// Joint bilateral upsampling of `low` (row-major, `(width + 1) / 2` × `(height + 1) / 2`, texel
+/// (i, j) computed at full-resolution pixel (2i, 2j)) to the size of `nd`, as
+/// `filter/upsample.wgsl` does it. `radius` is the AO radius R (support of the world-distance
+/// kernel), metres.
+pub fn joint_bilateral_upsample(
+    low: &[f32],
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    radius: f32,
+) -> Vec<f32> {
+    let (w, h) = (nd.width as i32, nd.height as i32);
+    let (lw, lh) = ((w + 1) / 2, (h + 1) / 2);
+    let mut out = vec![0.0; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let t = nd.front[(y * w + x) as usize];
+            if t.depth <= 0.0 {
+                continue;
+            }
+            let p = view.world_position(x, y, nd.width, nd.height, t.depth);
+            let nearest = ((x / 2).min(lw - 1), (y / 2).min(lh - 1));
+            let h_x = low[(nearest.1 * lw + nearest.0) as usize];
+            let (mut sum, mut weights) = (0.0f32, 0.0f32);
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let (lx, ly) = (nearest.0 + dx, nearest.1 + dy);
+                    let (qx, qy) = (lx * 2, ly * 2);
+                    if lx < 0 || ly < 0 || lx >= lw || ly >= lh || qx >= w || qy >= h {
+                        continue;
+                    }
+                    let q = nd.front[(qy * w + qx) as usize];
+                    if q.depth <= 0.0 {
+                        continue;
+                    }
+                    let h_y = low[(ly * lw + lx) as usize];
+                    let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
+                    let world =
+                        p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
+                    let weight = wendland(screen, 4.0)
+                        * wendland(1.0 - t.normal.dot(q.normal), 2.0)
+                        * wendland(world, radius)
+                        * wendland((h_x - h_y).abs(), 1.0);
+                    sum += weight * h_y;
+                    weights += weight;
+                }
+            }
+            out[(y * w + x) as usize] = if weights > 0.0 { sum / weights } else { h_x };
+        }
+    }
+    out
+}
+
 /// Blurs `occlusion` (row-major, the size of `nd`) along X then Y with the front layer's depth
 /// as the edge guide: the separable cross-bilateral filter of Bavoil & Sainz 2008.
 pub fn cross_bilateral_blur(
@@ -136,6 +197,22 @@ mod tests {
         );
         // Away from the edge, a constant stays constant.
         assert!((sharp[0] - 0.8).abs() < 1e-6 && sharp[31].abs() < 1e-6);
+    }
+
+    #[test]
+    fn wendland_kernel_shape() {
+        assert_eq!(wendland(0.0, 2.0), 1.0);
+        assert_eq!(wendland(2.0, 2.0), 0.0);
+        assert_eq!(wendland(3.0, 2.0), 0.0);
+        assert!(wendland(0.5, 2.0) > wendland(1.0, 2.0));
+    }
+
+    #[test]
+    fn upsampling_a_constant_keeps_it() {
+        let (_, nd, view) = step_edge();
+        let low = vec![0.3; 16 * 4];
+        let up = joint_bilateral_upsample(&low, &nd, &view, 1.0);
+        assert!(up.iter().all(|v| (v - 0.3).abs() < 1e-6));
     }
 
     #[test]

@@ -27,4 +27,6 @@ struct DynamicAoSettings {
     ray_directions: u32,
     ray_elevations: u32,
     ray_steps: u32,
+    // 1 at full resolution, 2 at half resolution.
+    resolution_scale: u32,
 }

@@ -11,6 +11,7 @@ mod ao_capture;
 mod back_layer;
 mod bad_input;
 mod cameras;
+mod half_resolution;
 mod harness;
 mod horizon;
 mod lighting;

@@ -1,0 +1,72 @@
+// Joint bilateral upsampling of a half-resolution occlusion buffer (Reinbothe, Boubekeur & Alexa
+// 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
+// window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
+// difference, world distance and AO difference. `reference::filter` is the CPU twin.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::settings::DynamicAoSettings
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(2) var depth_texture: texture_depth_2d;
+@group(0) @binding(3) var normal_texture: texture_2d<f32>;
+@group(0) @binding(4) var low: texture_2d<f32>;
+@group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
+
+// Screen-space support of w_d, full-resolution pixels (the m of eq. 6).
+const WINDOW: f32 = 4.0;
+
+// Wendland's compactly supported kernel, eq. 3.
+fn wendland(t: f32, h: f32) -> f32 {
+    if t > h {
+        return 0.0;
+    }
+    let s = 1.0 - t / h;
+    return s * s * s * s * (4.0 * t / h + 1.0);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = vec2<i32>(textureDimensions(depth_texture));
+    let low_dims = vec2<i32>(textureDimensions(low));
+    let x = vec2<i32>(id.xy);
+    if any(x >= dims) {
+        return;
+    }
+    let size = vec2<f32>(dims);
+    let depth = textureLoad(depth_texture, x, 0);
+    if depth <= 0.0 {
+        textureStore(output, x, vec4<f32>(0.0));
+        return;
+    }
+    let p = world_position(view, x, size, depth);
+    let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
+    let nearest = min(x / 2, low_dims - 1);
+    let h_x = textureLoad(low, nearest, 0).r;
+    var sum = 0.0;
+    var weights = 0.0;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let l = nearest + vec2<i32>(dx, dy);
+            // The full-resolution pixel each low-resolution texel was computed at.
+            let y = l * 2;
+            if any(l < vec2<i32>(0)) || any(l >= low_dims) || any(y >= dims) {
+                continue;
+            }
+            let dq = textureLoad(depth_texture, y, 0);
+            if dq <= 0.0 {
+                continue;
+            }
+            let h_y = textureLoad(low, l, 0).r;
+            let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
+            let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), 2.0);
+            let w_p = wendland(distance(p, world_position(view, y, size, dq)), settings.radius);
+            let w_h = wendland(abs(h_x - h_y), 1.0);
+            let w = w_d * w_n * w_p * w_h;
+            sum += w * h_y;
+            weights += w;
+        }
+    }
+    textureStore(output, x, vec4<f32>(select(h_x, sum / weights, weights > 0.0)));
+}
