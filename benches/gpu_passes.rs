@@ -29,10 +29,7 @@ const WARMUP_FRAMES: u32 = 10;
 enum Config {
     NoAo,
     BevySsao(ScreenSpaceAmbientOcclusionQualityLevel),
-    Ours(AoQuality),
-    Horizon,
-    RayMarch,
-    HalfResolution,
+    Preset(AoPreset),
 }
 
 impl Config {
@@ -40,10 +37,7 @@ impl Config {
         match self {
             Config::NoAo => "no AO".into(),
             Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
-            Config::Ours(quality) => format!("near-field {}", quality.name()),
-            Config::Horizon => "horizon (8 directions × 8 steps)".into(),
-            Config::RayMarch => "ray march (8 × 4 rays × 8 steps)".into(),
-            Config::HalfResolution => "near-field high, half resolution".into(),
+            Config::Preset(preset) => format!("preset {}", preset.name()),
         }
     }
 }
@@ -71,14 +65,12 @@ fn main() {
         Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Medium),
         Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::High),
         Config::BevySsao(ScreenSpaceAmbientOcclusionQualityLevel::Ultra),
-        Config::Ours(AoQuality::Low),
-        Config::Ours(AoQuality::Medium),
-        Config::Ours(AoQuality::High),
-        Config::Ours(AoQuality::Ultra),
-        Config::Horizon,
-        Config::RayMarch,
-        Config::HalfResolution,
+        Config::Preset(AoPreset::Low),
+        Config::Preset(AoPreset::Medium),
+        Config::Preset(AoPreset::High),
+        Config::Preset(AoPreset::Ultra),
     ];
+
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
         .iter()
@@ -204,20 +196,8 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 ..default()
             });
         }
-        Config::Ours(quality) => {
-            camera.insert(DynamicAo::default().with_quality(*quality));
-        }
-        Config::Horizon => {
-            camera.insert(DynamicAo::default().with_technique(AoTechnique::Horizon));
-        }
-        Config::RayMarch => {
-            camera.insert(DynamicAo::default().with_technique(AoTechnique::RayMarch));
-        }
-        Config::HalfResolution => {
-            camera.insert(DynamicAo {
-                half_resolution: true,
-                ..default()
-            });
+        Config::Preset(preset) => {
+            camera.insert(DynamicAo::from_preset(*preset));
         }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();

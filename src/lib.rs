@@ -47,8 +47,8 @@ use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
 pub use settings::{
-    AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams, NearFieldParams,
-    RayMarchParams,
+    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams,
+    NearFieldParams, RayMarchParams,
 };
 
 /// Everything a user of the crate usually needs.
@@ -56,8 +56,8 @@ pub mod prelude {
     pub use crate::DynamicAoPlugin;
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams, NearFieldParams,
-        RayMarchParams,
+        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams,
+        NearFieldParams, RayMarchParams,
     };
 }
 

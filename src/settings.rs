@@ -70,6 +70,42 @@ impl Default for DynamicAo {
 }
 
 impl DynamicAo {
+    /// A complete configuration: technique and parameters chosen together, from cheapest to
+    /// most accurate. The table in the README gives each one's cost and error.
+    pub fn from_preset(preset: AoPreset) -> Self {
+        let base = Self::default();
+        match preset {
+            AoPreset::Low => Self {
+                technique: AoTechnique::Horizon,
+                horizon: HorizonParams {
+                    directions: 4,
+                    steps: 4,
+                    mode: HorizonMode::Low,
+                    ..HorizonParams::default()
+                },
+                half_resolution: true,
+                ..base
+            },
+            AoPreset::Medium => Self {
+                technique: AoTechnique::Horizon,
+                horizon: HorizonParams {
+                    mode: HorizonMode::Low,
+                    ..HorizonParams::default()
+                },
+                ..base
+            },
+            AoPreset::High => Self {
+                technique: AoTechnique::NearField,
+                quality: AoQuality::High,
+                ..base
+            },
+            AoPreset::Ultra => Self {
+                technique: AoTechnique::RayMarch,
+                ..base
+            },
+        }
+    }
+
     /// The same settings with another technique.
     pub fn with_technique(mut self, technique: AoTechnique) -> Self {
         self.technique = technique;
@@ -163,6 +199,40 @@ impl AoBlur {
             } else {
                 DEFAULT_BLUR_SHARPNESS
             },
+        }
+    }
+}
+
+/// Complete configurations for [`DynamicAo::from_preset`].
+#[derive(Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[reflect(Clone, Debug, PartialEq, Hash)]
+pub enum AoPreset {
+    /// Horizon-based AO, low mode, 4 directions × 4 steps, at half resolution.
+    Low,
+    /// Horizon-based AO, low mode, 8 directions × 8 steps, full resolution.
+    Medium,
+    /// Two-layer near-field AO, 32 samples per pixel and layer (the [`DynamicAo`] default).
+    High,
+    /// The ray-marched reference, 8 × 4 rays × 8 steps.
+    Ultra,
+}
+
+impl AoPreset {
+    /// Every preset, from cheapest to most accurate.
+    pub const ALL: [AoPreset; 4] = [
+        AoPreset::Low,
+        AoPreset::Medium,
+        AoPreset::High,
+        AoPreset::Ultra,
+    ];
+
+    /// Lower-case name (`low`, `medium`, `high`, `ultra`).
+    pub fn name(self) -> &'static str {
+        match self {
+            AoPreset::Low => "low",
+            AoPreset::Medium => "medium",
+            AoPreset::High => "high",
+            AoPreset::Ultra => "ultra",
         }
     }
 }
@@ -452,6 +522,24 @@ mod tests {
         assert_eq!(ao.horizon.sanitized(), HorizonParams::default());
         assert_eq!(ao.blur.sharpness, DEFAULT_BLUR_SHARPNESS);
         assert!(!ao.debug_view);
+    }
+
+    #[test]
+    fn high_preset_is_the_default() {
+        assert_eq!(DynamicAo::from_preset(AoPreset::High), DynamicAo::default());
+        let techniques: Vec<AoTechnique> = AoPreset::ALL
+            .iter()
+            .map(|p| DynamicAo::from_preset(*p).technique)
+            .collect();
+        assert_eq!(
+            techniques,
+            [
+                AoTechnique::Horizon,
+                AoTechnique::Horizon,
+                AoTechnique::NearField,
+                AoTechnique::RayMarch
+            ]
+        );
     }
 
     #[test]
