@@ -23,9 +23,29 @@ const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
 
 // View-space position of the centre of `pixel` at reverse-Z depth `depth`.
 fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
-    let uv = (vec2<f32>(pixel) + 0.5) / size;
+    return view_position_at((vec2<f32>(pixel) + 0.5) / size, depth);
+}
+
+// View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
+fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
     let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
     return p.xyz / p.w;
+}
+
+// The tangent-plane vector that one pixel along image direction `dir` covers: the view ray
+// through that point meets the plane through `p` with normal `n`. Stepping in the image moves
+// along this vector, not along (dir.x, −dir.y, 0), once perspective is taken into account, so
+// a flat surface gets no occlusion from itself.
+fn tangent_along(pixel: vec2<i32>, size: vec2<f32>, dir: vec2<f32>, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let uv = (vec2<f32>(pixel) + 0.5 + dir) / size;
+    let a = view_position_at(uv, 1.0);
+    let b = view_position_at(uv, 0.5);
+    let denominator = dot(n, b - a);
+    if abs(denominator) < 1e-12 {
+        let along = vec3<f32>(dir.x, -dir.y, 0.0);
+        return along - n * dot(n, along);
+    }
+    return a + (b - a) * (dot(n, p - a) / denominator) - p;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -63,10 +83,8 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     for (var i = 0u; i < directions; i++) {
         let angle = (f32(i) + rotation) * TAU / f32(directions);
         let dir = vec2<f32>(cos(angle), sin(angle));
-        // The view-space direction this image direction stands for (image y points down), and
-        // the elevation of the tangent plane along it.
-        let along = vec3<f32>(dir.x, -dir.y, 0.0);
-        let tangent = along - n * dot(n, along);
+        // The elevation of the tangent plane along this image direction.
+        let tangent = tangent_along(pixel, size, dir, p, n);
         let sin_tangent = clamp(tangent.z / max(length(tangent), 1e-6), -1.0, 1.0);
         var sin_horizon = sin(min(asin(sin_tangent) + settings.horizon_angle_bias, HALF_PI));
         var jitter = pixel_jitter;

@@ -30,10 +30,34 @@ pub struct HorizonInputs {
 }
 
 fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
-    let u = (pixel.x as f32 + 0.5) / width as f32;
-    let v = (pixel.y as f32 + 0.5) / height as f32;
-    let p = view.clip_from_view.inverse() * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
+    let uv = (pixel.as_vec2() + 0.5) / Vec2::new(width as f32, height as f32);
+    view_position_at(view, uv, depth)
+}
+
+fn view_position_at(view: &ViewMatrices, uv: Vec2, depth: f32) -> Vec3 {
+    let p =
+        view.clip_from_view.inverse() * Vec4::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
     p.xyz() / p.w
+}
+
+/// The tangent-plane vector one pixel along image direction `dir` covers (see the shader).
+fn tangent_along(
+    view: &ViewMatrices,
+    pixel: IVec2,
+    size: Vec2,
+    dir: Vec2,
+    p: Vec3,
+    n: Vec3,
+) -> Vec3 {
+    let uv = (pixel.as_vec2() + 0.5 + dir) / size;
+    let a = view_position_at(view, uv, 1.0);
+    let b = view_position_at(view, uv, 0.5);
+    let denominator = n.dot(b - a);
+    if denominator.abs() < 1e-12 {
+        let along = Vec3::new(dir.x, -dir.y, 0.0);
+        return along - n * n.dot(along);
+    }
+    a + (b - a) * (n.dot(p - a) / denominator) - p
 }
 
 /// Occlusion (0 = open) of every pixel of the front layer of `nd`, row-major.
@@ -82,8 +106,8 @@ pub fn pixel_occlusion(
     for i in 0..inputs.directions {
         let angle = (i as f32 + rotation) * std::f32::consts::TAU / inputs.directions as f32;
         let dir = Vec2::new(angle.cos(), angle.sin());
-        let along = Vec3::new(dir.x, -dir.y, 0.0);
-        let tangent = along - n * n.dot(along);
+        let size = Vec2::new(w as f32, h as f32);
+        let tangent = tangent_along(view, pixel, size, dir, p, n);
         let sin_tangent = (tangent.z / tangent.length().max(1e-6)).clamp(-1.0, 1.0);
         let mut sin_horizon = (sin_tangent.asin() + inputs.angle_bias)
             .min(std::f32::consts::FRAC_PI_2)
