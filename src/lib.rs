@@ -34,6 +34,7 @@
 pub mod compose;
 pub mod filter;
 pub mod horizon;
+mod image_space;
 pub mod nd_buffer;
 pub mod near_field;
 pub mod ray_march;
@@ -82,6 +83,7 @@ impl Plugin for DynamicAoPlugin {
                 near_field::NearFieldPlugin,
                 horizon::HorizonPlugin,
                 ray_march::RayMarchPlugin,
+                image_space::ImageSpacePlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,
                 readback::ReadbackPlugin,

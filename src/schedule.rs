@@ -14,7 +14,7 @@ use bevy::render::RenderApp;
 pub enum DynamicAoSystems {
     /// Draws the back faces of the scene into the second ND-buffer layer.
     BackFaces,
-    /// Image-space near-field occlusion from both ND-buffer layers.
+    /// The view's image-space technique (near-field, horizon-based or ray march).
     NearField,
     /// Cross-bilateral blur of the occlusion.
     Filter,

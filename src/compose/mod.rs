@@ -24,9 +24,7 @@ use bevy::render::{
 };
 
 use crate::filter::BlurPipelines;
-use crate::horizon::HorizonPipeline;
-use crate::near_field::NearFieldPipeline;
-use crate::ray_march::RayMarchPipeline;
+use crate::image_space::ImageSpacePipelines;
 use crate::schedule::DynamicAoSystems;
 use crate::settings::AoTechnique;
 use crate::view::DynamicAoView;
@@ -85,9 +83,7 @@ pub(crate) struct AoPassesReady;
 fn hand_over_from_bevy_ssao(
     mut commands: Commands,
     pipeline_cache: Res<PipelineCache>,
-    near_field: Res<NearFieldPipeline>,
-    horizon: Res<HorizonPipeline>,
-    ray_march: Res<RayMarchPipeline>,
+    image_space: Res<ImageSpacePipelines>,
     blur: Res<BlurPipelines>,
     compose: Res<pipeline::ComposePipeline>,
     views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
@@ -95,11 +91,9 @@ fn hand_over_from_bevy_ssao(
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
     for (entity, view, bevy_ssao) in &views {
         let technique = match view.technique {
-            AoTechnique::NearField => ready(near_field.pipeline),
-            AoTechnique::Horizon => ready(horizon.pipeline),
-            AoTechnique::RayMarch => ready(ray_march.pipeline),
             AoTechnique::Off => true,
             AoTechnique::BevySsao => false,
+            technique => image_space.pipeline(technique).is_some_and(ready),
         };
         let filter = (view.blur_radius == 0 || (ready(blur.x) && ready(blur.y)))
             && (!view.half_resolution || ready(blur.upsample));

@@ -14,7 +14,8 @@
 @group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
-@group(0) @binding(4) var occlusion: texture_storage_2d<r32float, write>;
+// Bindings 4 and 5 (the back-face layer) belong to the shared layout; this pass leaves them unused.
+@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
 
 const TAU: f32 = 6.28318530717958648;
 const HALF_PI: f32 = 1.57079632679489662;

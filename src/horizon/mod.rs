@@ -11,41 +11,20 @@
 //! The whitepaper's low and high modes are named there but not spelled out; what they do here is
 //! documented on [`HorizonMode`](crate::settings::HorizonMode).
 
-mod node;
-mod pipeline;
-
 use bevy::app::{App, Plugin};
-use bevy::asset::embedded_asset;
-use bevy::core_pipeline::schedule::Core3d;
-use bevy::ecs::schedule::IntoScheduleConfigs;
-use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
+use bevy::ecs::world::World;
+use bevy::shader::Shader;
 
-use crate::schedule::DynamicAoSystems;
-
-pub(crate) use pipeline::HorizonPipeline;
-
-/// Registers the horizon-based pipeline and pass.
+/// Embeds the horizon-based shader; the shared image-space pass (`crate::image_space`) runs it.
 pub struct HorizonPlugin;
 
 impl Plugin for HorizonPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "horizon.wgsl");
     }
+}
 
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
-        render_app
-            .init_gpu_resource::<pipeline::HorizonPipeline>()
-            .add_systems(
-                Render,
-                pipeline::prepare_horizon_bind_groups.in_set(RenderSystems::PrepareBindGroups),
-            )
-            // Writes the same occlusion buffer the near-field pass writes; one of them runs.
-            .add_systems(
-                Core3d,
-                node::horizon_pass.in_set(DynamicAoSystems::NearField),
-            );
-    }
+pub(crate) fn shader(world: &World) -> Handle<Shader> {
+    load_embedded_asset!(world, "horizon.wgsl")
 }

@@ -22,40 +22,20 @@
 //!   occluders hidden behind one another again and again (the over-occlusion of §6). For small
 //!   A_ψ the two agree.
 
-mod node;
-mod pipeline;
-
 use bevy::app::{App, Plugin};
-use bevy::asset::embedded_asset;
-use bevy::core_pipeline::schedule::Core3d;
-use bevy::ecs::schedule::IntoScheduleConfigs;
-use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
+use bevy::ecs::world::World;
+use bevy::shader::Shader;
 
-use crate::schedule::DynamicAoSystems;
-
-/// Registers the near-field pipeline and pass.
+/// Embeds the near-field shader; the shared image-space pass (`crate::image_space`) runs it.
 pub struct NearFieldPlugin;
 
 impl Plugin for NearFieldPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "near_field.wgsl");
     }
-
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
-        render_app
-            .init_gpu_resource::<pipeline::NearFieldPipeline>()
-            .add_systems(
-                Render,
-                pipeline::prepare_near_field_bind_groups.in_set(RenderSystems::PrepareBindGroups),
-            )
-            .add_systems(
-                Core3d,
-                node::near_field_pass.in_set(DynamicAoSystems::NearField),
-            );
-    }
 }
 
-pub(crate) use pipeline::NearFieldPipeline;
+pub(crate) fn shader(world: &World) -> Handle<Shader> {
+    load_embedded_asset!(world, "near_field.wgsl")
+}

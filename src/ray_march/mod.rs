@@ -9,41 +9,20 @@
 //! the fraction of blocked rays. Costly, but its error against ray-traced ground truth shrinks as
 //! the ray count grows. `reference::ray_march` is the CPU twin.
 
-mod node;
-mod pipeline;
-
 use bevy::app::{App, Plugin};
-use bevy::asset::embedded_asset;
-use bevy::core_pipeline::schedule::Core3d;
-use bevy::ecs::schedule::IntoScheduleConfigs;
-use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
+use bevy::ecs::world::World;
+use bevy::shader::Shader;
 
-use crate::schedule::DynamicAoSystems;
-
-pub(crate) use pipeline::RayMarchPipeline;
-
-/// Registers the ray-marched pipeline and pass.
+/// Embeds the ray-marched shader; the shared image-space pass (`crate::image_space`) runs it.
 pub struct RayMarchPlugin;
 
 impl Plugin for RayMarchPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "ray_march.wgsl");
     }
+}
 
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
-        render_app
-            .init_gpu_resource::<pipeline::RayMarchPipeline>()
-            .add_systems(
-                Render,
-                pipeline::prepare_ray_march_bind_groups.in_set(RenderSystems::PrepareBindGroups),
-            )
-            // Writes the same occlusion buffer the near-field pass writes; one of them runs.
-            .add_systems(
-                Core3d,
-                node::ray_march_pass.in_set(DynamicAoSystems::NearField),
-            );
-    }
+pub(crate) fn shader(world: &World) -> Handle<Shader> {
+    load_embedded_asset!(world, "ray_march.wgsl")
 }
