@@ -53,6 +53,19 @@ impl ViewMatrices {
         world.xyz() / world.w
     }
 
+    /// View-space position of the centre of pixel (x, y) at reverse-Z `depth`.
+    pub fn view_position(&self, x: i32, y: i32, width: u32, height: u32, depth: f32) -> Vec3 {
+        let u = (x as f32 + 0.5) / width as f32;
+        let v = (y as f32 + 0.5) / height as f32;
+        self.view_position_at(u, v, depth)
+    }
+
+    /// View-space position at viewport coordinates (u, v) (0..1, v down) and reverse-Z `depth`.
+    pub fn view_position_at(&self, u: f32, v: f32, depth: f32) -> Vec3 {
+        let p = self.clip_from_view.inverse() * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
+        p.xyz() / p.w
+    }
+
     /// Distance in front of the camera along its view axis (metres).
     pub fn view_depth(&self, world_position: Vec3) -> f32 {
         -(self.view_from_world * world_position.extend(1.0)).z

@@ -1,6 +1,6 @@
 //! The ray-marched reference on the CPU, step for step as `ray_march/ray_march.wgsl` runs it.
 
-use bevy::math::{IVec2, Vec3, Vec4, Vec4Swizzles};
+use bevy::math::{IVec2, Vec3, Vec4Swizzles};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::pcg_hash;
@@ -23,10 +23,7 @@ pub struct RayMarchInputs {
 }
 
 fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
-    let u = (pixel.x as f32 + 0.5) / width as f32;
-    let v = (pixel.y as f32 + 0.5) / height as f32;
-    let p = view.clip_from_view.inverse() * Vec4::new(u * 2.0 - 1.0, 1.0 - v * 2.0, depth, 1.0);
-    p.xyz() / p.w
+    view.view_position(pixel.x, pixel.y, width, height, depth)
 }
 
 /// 1 blocked, 0 free, −1 left the screen.

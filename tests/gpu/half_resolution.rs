@@ -8,7 +8,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, pixel_occlusion},
 };
 
-use crate::harness::{Gpu, HEIGHT, WIDTH};
+use crate::harness::{Gpu, HEIGHT, WIDTH, difference_stats};
 use crate::scenes;
 
 #[test]
@@ -58,17 +58,7 @@ fn half_resolution_matches_the_cpu_and_stays_close_to_full_resolution() {
         .into_iter()
         .map(|o| 1.0 - o)
         .collect();
-        let mut diffs: Vec<f32> = half
-            .visibility
-            .iter()
-            .zip(&cpu)
-            .zip(&mask)
-            .filter(|(_, m)| **m)
-            .map(|((g, c), _)| (g - c).abs())
-            .collect();
-        diffs.sort_by(f32::total_cmp);
-        let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
-        let p99 = diffs[diffs.len() * 99 / 100];
+        let (mean, p99) = difference_stats(&half.visibility, &cpu, &mask);
         let against_full = rmse(&half.visibility, &full.visibility, Some(&mask));
         let truth = half.ground_truth(&scene.bvh(), radius);
         println!(

@@ -363,6 +363,21 @@ fn srgb_to_linear(v: u8) -> f32 {
     }
 }
 
+/// Mean and 99th percentile of |gpu − cpu| over the masked pixels.
+pub fn difference_stats(gpu: &[f32], cpu: &[f32], mask: &[bool]) -> (f32, f32) {
+    let mut diffs: Vec<f32> = gpu
+        .iter()
+        .zip(cpu)
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .map(|((g, c), _)| (g - c).abs())
+        .collect();
+    assert!(!diffs.is_empty(), "no pixel to compare");
+    diffs.sort_by(f32::total_cmp);
+    let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
+    (mean, diffs[diffs.len() * 99 / 100])
+}
+
 /// Index of pixel (x, y).
 pub fn index(x: u32, y: u32) -> usize {
     (y * WIDTH + x) as usize

@@ -6,7 +6,7 @@ use bevy_dynamic_ao::reference::{
     metrics::{mean_bias, rmse},
 };
 
-use crate::harness::Gpu;
+use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
 fn inputs(ao: &DynamicAo) -> HorizonInputs {
@@ -42,17 +42,7 @@ fn horizon_matches_the_cpu_evaluation_and_tracks_ground_truth() {
             .into_iter()
             .map(|o| 1.0 - o)
             .collect();
-        let mut diffs: Vec<f32> = frame
-            .visibility
-            .iter()
-            .zip(&cpu)
-            .zip(&mask)
-            .filter(|(_, m)| **m)
-            .map(|((g, c), _)| (g - c).abs())
-            .collect();
-        diffs.sort_by(f32::total_cmp);
-        let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
-        let p99 = diffs[diffs.len() * 99 / 100];
+        let (mean, p99) = difference_stats(&frame.visibility, &cpu, &mask);
         let truth = frame.ground_truth(&scene.bvh(), radius);
         let raw = rmse(&frame.visibility, &truth, Some(&mask));
         gpu.set_ao(|ao| ao.blur = AoBlur::default());

@@ -11,7 +11,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
-use crate::harness::Gpu;
+use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
 /// Bevy 0.19's SSAO radius is fixed in its shader (0.5 × 1.457 m, falling off over its outer
@@ -73,17 +73,7 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
             covered > 5000,
             "{name}: the camera sees too little ({covered} pixels)"
         );
-        let mut diffs: Vec<f32> = frame
-            .visibility
-            .iter()
-            .zip(&cpu)
-            .zip(&mask)
-            .filter(|(_, m)| **m)
-            .map(|((g, c), _)| (g - c).abs())
-            .collect();
-        diffs.sort_by(f32::total_cmp);
-        let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
-        let p99 = diffs[diffs.len() * 99 / 100];
+        let (mean, p99) = difference_stats(&frame.visibility, &cpu, &mask);
         println!("{name}: GPU vs CPU mean |diff| {mean:.5}, 99th percentile {p99:.5}");
         // The hand-off texture may be R16Float (about 1e-3 steps near 1), and a sample that lands
         // on a pixel boundary can round to a neighbour on one side only.

@@ -7,7 +7,7 @@ use bevy_dynamic_ao::reference::{
     ray_march::{RayMarchInputs, ray_march_occlusion},
 };
 
-use crate::harness::Gpu;
+use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
 #[test]
@@ -42,17 +42,7 @@ fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
         .into_iter()
         .map(|o| 1.0 - o)
         .collect();
-    let mut diffs: Vec<f32> = first
-        .visibility
-        .iter()
-        .zip(&cpu)
-        .zip(&mask)
-        .filter(|(_, m)| **m)
-        .map(|((g, c), _)| (g - c).abs())
-        .collect();
-    diffs.sort_by(f32::total_cmp);
-    let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
-    let p99 = diffs[diffs.len() * 99 / 100];
+    let (mean, p99) = difference_stats(&first.visibility, &cpu, &mask);
     println!("ray march GPU vs CPU: mean |diff| {mean:.5}, 99th percentile {p99:.5}");
     // A ray whose step lands on a pixel edge can flip on one side only: one ray of two is 0.5.
     assert!(mean < 0.01, "mean |GPU − CPU| = {mean}");
