@@ -73,6 +73,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/nd_buffer.wgsl");
         load_shader_library!(app, "shaders/sampling.wgsl");
         load_shader_library!(app, "shaders/settings.wgsl");
+        load_shader_library!(app, "shaders/image_space_bindings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
 
         app.register_type::<DynamicAo>()

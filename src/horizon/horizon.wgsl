@@ -5,17 +5,11 @@
 // per-direction jitter).
 // `reference::horizon` is the CPU twin; keep the two in step.
 
-#import bevy_render::view::View
+#import bevy_dynamic_ao::image_space_bindings::{
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+}
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, pixel_world_size}
 #import bevy_dynamic_ao::sampling::pcg_hash
-#import bevy_dynamic_ao::settings::DynamicAoSettings
-
-@group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
-@group(0) @binding(2) var depth_texture: texture_depth_2d;
-@group(0) @binding(3) var normal_texture: texture_2d<f32>;
-// Bindings 4 and 5 (the back-face layer) belong to the shared layout; this pass leaves them unused.
-@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
 
 const TAU: f32 = 6.28318530717958648;
 const HALF_PI: f32 = 1.57079632679489662;
@@ -55,14 +49,14 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // and writes one texel of the half-size buffer.
     let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
     let out_pixel = vec2<i32>(invocation.xy);
-    let dims = textureDimensions(depth_texture);
+    let dims = textureDimensions(front_depth);
     if id.x >= dims.x || id.y >= dims.y {
         return;
     }
     let pixel = vec2<i32>(id.xy);
     let size = vec2<f32>(dims);
-    let depth = textureLoad(depth_texture, pixel, 0);
-    let world_normal = decode_normal(textureLoad(normal_texture, pixel, 0).xyz);
+    let depth = textureLoad(front_depth, pixel, 0);
+    let world_normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
         textureStore(occlusion, out_pixel, vec4<f32>(0.0));
         return;
@@ -95,7 +89,7 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
             jitter = f32(pcg_hash(hash ^ ((i + 1u) * 0x9e3779b9u))) * HASH_TO_UNIT;
             let q = pixel + vec2<i32>(floor(dir + 0.5));
             if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(dims)) && any(q != pixel) {
-                let dq = textureLoad(depth_texture, q, 0);
+                let dq = textureLoad(front_depth, q, 0);
                 if dq > 0.0 {
                     let v = view_position(q, size, dq) - p;
                     let r = length(v);
@@ -112,7 +106,7 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
             if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
                 continue;
             }
-            let dq = textureLoad(depth_texture, q, 0);
+            let dq = textureLoad(front_depth, q, 0);
             if dq <= 0.0 {
                 continue;
             }

@@ -1,19 +1,12 @@
 // Near-field ambient occlusion in image space: Shanmugam & Arikan 2007, §4, eq. 2–4.
 // `reference::near_field` evaluates the same steps on the CPU; keep the two in step.
 
-#import bevy_render::view::View
+#import bevy_dynamic_ao::image_space_bindings::{
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+}
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
 #import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
 #import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
-#import bevy_dynamic_ao::settings::DynamicAoSettings
-
-@group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
-@group(0) @binding(2) var front_depth: texture_depth_2d;
-@group(0) @binding(3) var front_normal: texture_2d<f32>;
-@group(0) @binding(4) var back_depth: texture_depth_2d;
-@group(0) @binding(5) var back_normal: texture_2d<f32>;
-@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
 
 const PI: f32 = 3.14159265358979;
 

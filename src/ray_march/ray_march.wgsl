@@ -1,18 +1,11 @@
 // Ray-marched ambient occlusion through both ND-buffer layers (Bavoil & Sainz 2008,
 // "Ray-Marched Ambient Occlusion"). `reference::ray_march` is the CPU twin.
 
-#import bevy_render::view::View
+#import bevy_dynamic_ao::image_space_bindings::{
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+}
 #import bevy_dynamic_ao::nd_buffer::decode_normal
 #import bevy_dynamic_ao::sampling::pcg_hash
-#import bevy_dynamic_ao::settings::DynamicAoSettings
-
-@group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
-@group(0) @binding(2) var front_depth: texture_depth_2d;
-@group(0) @binding(3) var front_normal: texture_2d<f32>;
-@group(0) @binding(4) var back_depth: texture_depth_2d;
-@group(0) @binding(5) var back_normal: texture_2d<f32>;
-@group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
 
 const TAU: f32 = 6.28318530717958648;
 const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
