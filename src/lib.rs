@@ -20,9 +20,12 @@
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
 //! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4), or
 //!    [`horizon`] computes horizon-based occlusion from the front layer (Bavoil & Sainz 2008).
-//! 3. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
+//! 3. [`spheres`] adds far-field occlusion from the spheres of every
+//!    [`SphereOccluder`](spheres::SphereOccluder), refit each frame to skinned and morphed
+//!    meshes (S&A §5), including occluders that are off-screen or hidden.
+//! 4. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
 //!    cross depth edges (Bavoil & Sainz 2008).
-//! 4. [`compose`] turns occlusion into visibility and writes it into the texture Bevy's PBR
+//! 5. [`compose`] turns near- and far-field occlusion into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
 //!    environment specular darken; direct lights are untouched.
 //!
@@ -42,6 +45,7 @@ pub mod readback;
 pub mod reference;
 pub mod schedule;
 pub mod settings;
+pub mod spheres;
 mod view;
 
 use bevy::app::{App, Plugin};
@@ -60,6 +64,9 @@ pub mod prelude {
         AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams,
         NearFieldParams, RayMarchParams,
     };
+    #[cfg(feature = "gizmos")]
+    pub use crate::spheres::ShowOccluderSpheres;
+    pub use crate::spheres::{OccluderSpheres, SphereOccluder};
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
@@ -84,6 +91,7 @@ impl Plugin for DynamicAoPlugin {
                 near_field::NearFieldPlugin,
                 horizon::HorizonPlugin,
                 ray_march::RayMarchPlugin,
+                spheres::SphereOccluderPlugin,
                 image_space::ImageSpacePlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,

@@ -16,6 +16,8 @@ pub enum DynamicAoSystems {
     BackFaces,
     /// The view's image-space technique (near-field, horizon-based or ray march).
     NearField,
+    /// Splats the spheres of far-field occluders into the far-field buffer.
+    FarField,
     /// Cross-bilateral blur of the occlusion.
     Filter,
     /// Combines the occlusion terms and writes visibility for Bevy's PBR lighting.
@@ -31,7 +33,7 @@ pub(crate) fn configure(app: &mut App) {
     use DynamicAoSystems::*;
     render_app.configure_sets(
         Core3d,
-        (BackFaces, NearField, Filter, Compose)
+        (BackFaces, NearField, FarField, Filter, Compose)
             .chain()
             // The front layer is Bevy's prepass output.
             .after(Core3dSystems::Prepass)

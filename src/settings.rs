@@ -48,6 +48,12 @@ pub struct DynamicAo {
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
     /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `false`.
     pub half_resolution: bool,
+    /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)
+    /// in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are off-screen or
+    /// hidden. Works with every technique except [`AoTechnique::BevySsao`] (whose result Bevy
+    /// writes itself); with [`AoTechnique::Off`] the far field is the whole occlusion.
+    /// Default: `true` (a scene without sphere occluders costs one cleared buffer).
+    pub spheres: bool,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -64,6 +70,7 @@ impl Default for DynamicAo {
             ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
             half_resolution: false,
+            spheres: true,
             debug_view: false,
         }
     }

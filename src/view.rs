@@ -28,6 +28,8 @@ pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
 pub(crate) const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
 /// Format of the intermediate occlusion buffers (always usable as a storage texture).
 pub(crate) const OCCLUSION_FORMAT: TextureFormat = TextureFormat::R32Float;
+/// Format of the far-field buffer: blendable on every adapter (R32Float blending is optional).
+pub(crate) const FAR_OCCLUSION_FORMAT: TextureFormat = TextureFormat::R16Float;
 
 pub(crate) struct ViewPlugin;
 
@@ -142,6 +144,8 @@ pub(crate) struct DynamicAoView {
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.
     pub half_resolution: bool,
+    /// The far field of sphere occluders takes part.
+    pub far_field: bool,
     pub debug_view: bool,
 }
 
@@ -181,6 +185,8 @@ pub(crate) struct DynamicAoUniform {
     pub ray_steps: u32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
+    /// 1 when the far field of sphere occluders takes part.
+    pub far_field: u32,
 }
 
 fn extract_views(
@@ -211,6 +217,8 @@ fn extract_views(
             near_field || matches!(ao.technique, AoTechnique::Horizon | AoTechnique::RayMarch);
         let horizon = ao.horizon.sanitized();
         let rays = ao.ray_march.sanitized();
+        // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
+        let far_field = ao.spheres && ao.technique != AoTechnique::BevySsao;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
@@ -218,6 +226,7 @@ fn extract_views(
                     || ao.technique == AoTechnique::RayMarch,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
+                far_field,
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -239,6 +248,7 @@ fn extract_views(
                 ray_elevations: rays.rays_per_direction,
                 ray_steps: rays.steps,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
+                far_field: u32::from(far_field),
             },
         ));
     }
@@ -256,6 +266,8 @@ pub(crate) struct DynamicAoTextures {
     pub full_occlusion: CachedTexture,
     /// Between the two passes of the blur.
     pub blur_scratch: CachedTexture,
+    /// Summed far-field occlusion of the sphere occluders, full size.
+    pub far_occlusion: CachedTexture,
 }
 
 fn prepare_view_textures(
@@ -311,6 +323,12 @@ fn prepare_view_textures(
             near_occlusion,
             full_occlusion,
             blur_scratch: texture("dynamic_ao_blur_scratch", full, OCCLUSION_FORMAT, storage),
+            far_occlusion: texture(
+                "dynamic_ao_far_occlusion",
+                full,
+                FAR_OCCLUSION_FORMAT,
+                attachment,
+            ),
         });
     }
 }

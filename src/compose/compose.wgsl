@@ -5,10 +5,11 @@
 
 @group(0) @binding(0) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
+@group(0) @binding(2) var far_occlusion: texture_2d<f32>;
 #ifdef VISIBILITY_R16FLOAT
-@group(0) @binding(2) var visibility: texture_storage_2d<r16float, write>;
+@group(0) @binding(3) var visibility: texture_storage_2d<r16float, write>;
 #else
-@group(0) @binding(2) var visibility: texture_storage_2d<r32float, write>;
+@group(0) @binding(3) var visibility: texture_storage_2d<r32float, write>;
 #endif
 
 @compute @workgroup_size(8, 8, 1)
@@ -21,6 +22,9 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     var occlusion = 0.0;
     if settings.near_field != 0u {
         occlusion += textureLoad(near_occlusion, pixel, 0).r;
+    }
+    if settings.far_field != 0u {
+        occlusion += textureLoad(far_occlusion, pixel, 0).r;
     }
     textureStore(visibility, pixel, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
 }

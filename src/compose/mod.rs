@@ -27,6 +27,7 @@ use crate::filter::BlurPipelines;
 use crate::image_space::ImageSpacePipelines;
 use crate::schedule::DynamicAoSystems;
 use crate::settings::AoTechnique;
+use crate::spheres::SplatPipeline;
 use crate::view::DynamicAoView;
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
@@ -86,6 +87,7 @@ fn hand_over_from_bevy_ssao(
     image_space: Res<ImageSpacePipelines>,
     blur: Res<BlurPipelines>,
     compose: Res<pipeline::ComposePipeline>,
+    splat: Res<SplatPipeline>,
     views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
 ) {
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
@@ -97,7 +99,9 @@ fn hand_over_from_bevy_ssao(
         };
         let filter = (view.blur_radius == 0 || (ready(blur.x) && ready(blur.y)))
             && (!view.half_resolution || ready(blur.upsample));
-        if technique && filter && ready(compose.pipeline) {
+        let far_field =
+            !view.far_field || pipeline_cache.get_render_pipeline(splat.pipeline).is_some();
+        if technique && filter && far_field && ready(compose.pipeline) {
             commands.entity(entity).insert(AoPassesReady);
             if bevy_ssao {
                 commands.entity(entity).remove::<SsaoPipelineId>();

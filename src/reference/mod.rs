@@ -5,6 +5,7 @@
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
 //! - [`horizon`]: horizon-based AO (Bavoil & Sainz 2008) exactly as `horizon.wgsl` runs it.
 //! - [`ray_march`]: the ray-marched reference exactly as `ray_march.wgsl` runs it.
+//! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
 //! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
 //! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
@@ -23,3 +24,4 @@ pub mod png16;
 pub mod ray_march;
 pub mod sampling;
 pub mod scene;
+pub mod spheres;

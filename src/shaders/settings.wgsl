@@ -29,4 +29,6 @@ struct DynamicAoSettings {
     ray_steps: u32,
     // 1 at full resolution, 2 at half resolution.
     resolution_scale: u32,
+    // 1 when the far field of sphere occluders takes part.
+    far_field: u32,
 }

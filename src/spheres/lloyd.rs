@@ -1,0 +1,371 @@
+//! Lloyd clustering of a mesh's rest-pose vertices into spheres (Shanmugam & Arikan 2007, §5).
+//!
+//! Vertices carry the surface area around them as weight, so a finely tessellated hand does
+//! not draw more spheres than a coarse torso. Seeding is k-means++ with a fixed hash-based
+//! random sequence: the same mesh always gives the same spheres.
+//!
+//! Each cluster is a patch of surface; its sphere stands for the volume under that patch, so
+//! it is pushed inwards and kept inside the surface. That matters because A_ψ = 1 inside a
+//! sphere (§6): a sphere poking out of the mesh would black out the object's own surface.
+
+use bevy::math::Vec3;
+
+use super::rest_mesh::RestMesh;
+use crate::reference::bvh::Bvh;
+use crate::reference::sampling::pcg_hash;
+use crate::reference::scene::Triangle;
+
+/// Most Lloyd iterations; clustering usually settles well before.
+const MAX_ITERATIONS: usize = 32;
+
+/// One sphere in the rest pose, with what the per-frame refit needs to move it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestSphere {
+    /// Sphere centre, mesh space, metres.
+    pub center: Vec3,
+    /// Sphere radius, metres.
+    pub radius: f32,
+    /// Area-weighted centroid of the cluster's vertices, mesh space.
+    pub centroid: Vec3,
+    /// Area-weighted RMS distance of the cluster's vertices from `centroid`, metres.
+    pub spread: f32,
+}
+
+/// A mesh cut into clusters, with vertex data sorted by cluster so the refit walks memory in
+/// order.
+#[derive(Clone, Debug, Default)]
+pub struct ClusteredMesh {
+    /// One sphere per non-empty cluster.
+    pub spheres: Vec<RestSphere>,
+    /// Vertices of sphere `i` are `order[ranges[i].0..ranges[i].1]`.
+    pub ranges: Vec<(u32, u32)>,
+    /// Vertex indices of the rest mesh, grouped by cluster.
+    pub order: Vec<u32>,
+    /// Joint weights of each sphere (summed vertex weights × areas, normalized): what moves
+    /// the offset from the centroid to the centre.
+    pub sphere_joints: Vec<Vec<(u16, f32)>>,
+}
+
+/// Clusters the vertices of `mesh` that carry area into at most `count` clusters and fits a
+/// sphere to each. Fewer spheres come back when the mesh has fewer distinct vertices.
+pub fn cluster(mesh: &RestMesh, count: u32) -> ClusteredMesh {
+    let vertices: Vec<u32> = (0..mesh.positions.len() as u32)
+        .filter(|&i| mesh.areas[i as usize] > 0.0 && mesh.positions[i as usize].is_finite())
+        .collect();
+    if vertices.is_empty() || count == 0 {
+        return ClusteredMesh::default();
+    }
+    let points: Vec<Vec3> = vertices
+        .iter()
+        .map(|&i| mesh.positions[i as usize])
+        .collect();
+    let weights: Vec<f32> = vertices.iter().map(|&i| mesh.areas[i as usize]).collect();
+    let mut centres = seed(&points, &weights, count as usize);
+    let mut assignment = vec![0u32; points.len()];
+    for iteration in 0..MAX_ITERATIONS {
+        let mut changed = false;
+        for (p, slot) in points.iter().zip(&mut assignment) {
+            let nearest = nearest(&centres, *p);
+            changed |= nearest != *slot;
+            *slot = nearest;
+        }
+        if !changed && iteration > 0 {
+            break;
+        }
+        let mut sums = vec![(Vec3::ZERO, 0.0f32); centres.len()];
+        for ((p, w), &a) in points.iter().zip(&weights).zip(&assignment) {
+            sums[a as usize].0 += *p * *w;
+            sums[a as usize].1 += *w;
+        }
+        for (centre, (sum, weight)) in centres.iter_mut().zip(sums) {
+            if weight > 0.0 {
+                *centre = sum / weight;
+            }
+        }
+    }
+
+    let bvh = Bvh::new(
+        mesh.triangles
+            .iter()
+            .map(|t| Triangle {
+                vertices: t.map(|i| mesh.positions[i as usize]),
+                normals: None,
+            })
+            .collect(),
+    );
+    let mut clustered = ClusteredMesh::default();
+    for k in 0..centres.len() as u32 {
+        let members: Vec<u32> = vertices
+            .iter()
+            .zip(&assignment)
+            .filter(|(_, a)| **a == k)
+            .map(|(v, _)| *v)
+            .collect();
+        let Some(sphere) = fit_sphere(mesh, &bvh, &members) else {
+            continue;
+        };
+        let start = clustered.order.len() as u32;
+        clustered.order.extend_from_slice(&members);
+        clustered.ranges.push((start, clustered.order.len() as u32));
+        clustered.spheres.push(sphere);
+        clustered.sphere_joints.push(sphere_joints(mesh, &members));
+    }
+    clustered
+}
+
+/// k-means++ seeding: each new centre is drawn with probability ∝ area × squared distance to
+/// the nearest centre so far, from a fixed hash sequence.
+fn seed(points: &[Vec3], weights: &[f32], count: usize) -> Vec<Vec3> {
+    let mut random = 0x5eed_u32;
+    let mut next = move || {
+        random = pcg_hash(random);
+        random as f32 / u32::MAX as f32
+    };
+    let pick = |scores: &[f32], u: f32| -> usize {
+        let total: f32 = scores.iter().sum();
+        let mut target = u * total;
+        for (i, s) in scores.iter().enumerate() {
+            target -= s;
+            if target <= 0.0 && *s > 0.0 {
+                return i;
+            }
+        }
+        scores.iter().rposition(|s| *s > 0.0).unwrap_or(0)
+    };
+    let mut centres = vec![points[pick(weights, next())]];
+    let mut distance2: Vec<f32> = points
+        .iter()
+        .map(|p| p.distance_squared(centres[0]))
+        .collect();
+    while centres.len() < count {
+        let scores: Vec<f32> = distance2.iter().zip(weights).map(|(d, w)| d * w).collect();
+        if scores.iter().all(|s| *s <= 0.0) {
+            // Every remaining vertex coincides with a centre: no more distinct clusters.
+            break;
+        }
+        let centre = points[pick(&scores, next())];
+        for (d, p) in distance2.iter_mut().zip(points) {
+            *d = d.min(p.distance_squared(centre));
+        }
+        centres.push(centre);
+    }
+    centres
+}
+
+fn nearest(centres: &[Vec3], p: Vec3) -> u32 {
+    let mut best = (0, f32::INFINITY);
+    for (i, c) in centres.iter().enumerate() {
+        let d = p.distance_squared(*c);
+        if d < best.1 {
+            best = (i as u32, d);
+        }
+    }
+    best.0
+}
+
+/// The sphere of one cluster: centred under the patch by the thickness of the mesh there, no
+/// larger than the patch, and no larger than the distance to the nearest triangle, so it stays
+/// inside a closed surface.
+fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere> {
+    let (mut area, mut centroid, mut mean_normal) = (0.0f32, Vec3::ZERO, Vec3::ZERO);
+    for &i in members {
+        let w = mesh.areas[i as usize];
+        area += w;
+        centroid += mesh.positions[i as usize] * w;
+        mean_normal += mesh.normals[i as usize] * w;
+    }
+    if area <= 0.0 {
+        return None;
+    }
+    centroid /= area;
+    // |mean_normal| is 1 for a flat patch and near 0 for one that wraps around a limb, whose
+    // centroid already lies inside.
+    mean_normal /= area;
+    let spread = (members
+        .iter()
+        .map(|&i| mesh.areas[i as usize] * mesh.positions[i as usize].distance_squared(centroid))
+        .sum::<f32>()
+        / area)
+        .sqrt();
+    let inward = -mean_normal.normalize_or_zero();
+    let thickness = if inward == Vec3::ZERO {
+        0.0
+    } else {
+        bvh.closest_hit(centroid, inward, 1e-5 * spread.max(1e-6), f32::INFINITY)
+            .map_or(f32::INFINITY, |hit| hit.t)
+    };
+    let shift = (spread * mean_normal.length()).min(0.5 * thickness);
+    let center = centroid + inward * shift;
+    let radius = spread.min(nearest_surface_distance(mesh, center));
+    (radius > 1e-6 && radius.is_finite()).then_some(RestSphere {
+        center,
+        radius,
+        centroid,
+        spread,
+    })
+}
+
+fn nearest_surface_distance(mesh: &RestMesh, p: Vec3) -> f32 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            closest_point_on_triangle(p, a, b, c).distance(p)
+        })
+        .fold(f32::INFINITY, f32::min)
+}
+
+/// Closest point to `p` on triangle `abc` (region tests on the barycentric coordinates).
+fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+fn sphere_joints(mesh: &RestMesh, members: &[u32]) -> Vec<(u16, f32)> {
+    let Some(skin) = &mesh.skin else {
+        return Vec::new();
+    };
+    let mut joints: Vec<(u16, f32)> = Vec::new();
+    for &i in members {
+        let s = &skin[i as usize];
+        for (j, w) in s.joints.iter().zip(s.weights) {
+            let w = w * mesh.areas[i as usize];
+            if w <= 0.0 {
+                continue;
+            }
+            match joints.iter_mut().find(|(k, _)| k == j) {
+                Some(entry) => entry.1 += w,
+                None => joints.push((*j, w)),
+            }
+        }
+    }
+    let total: f32 = joints.iter().map(|(_, w)| w).sum();
+    if total > 0.0 {
+        joints.iter_mut().for_each(|(_, w)| *w /= total);
+    }
+    joints
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A UV sphere of `radius` around `center`.
+    pub(crate) fn uv_sphere(center: Vec3, radius: f32, rings: usize) -> RestMesh {
+        let segments = rings * 2;
+        let mut positions = Vec::new();
+        for r in 0..=rings {
+            let theta = std::f32::consts::PI * r as f32 / rings as f32;
+            for s in 0..=segments {
+                let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+                let n = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                );
+                positions.push(center + n * radius);
+            }
+        }
+        let normals = positions.iter().map(|p| (*p - center) / radius).collect();
+        let mut indices = Vec::new();
+        let row = segments + 1;
+        for r in 0..rings {
+            for s in 0..segments {
+                let (a, b) = (r * row + s, (r + 1) * row + s);
+                indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+            }
+        }
+        RestMesh::new(positions, Some(normals), &indices, None, Vec::new(), 0).unwrap()
+    }
+
+    #[test]
+    fn one_cluster_of_a_sphere_is_the_sphere() {
+        let mesh = uv_sphere(Vec3::new(1.0, 2.0, 3.0), 0.5, 16);
+        let clustered = cluster(&mesh, 1);
+        assert_eq!(clustered.spheres.len(), 1);
+        let s = clustered.spheres[0];
+        assert!(s.center.distance(Vec3::new(1.0, 2.0, 3.0)) < 0.01, "{s:?}");
+        // The inscribed sphere of the tessellation is a little smaller than the ideal one.
+        assert!(s.radius > 0.47 && s.radius <= 0.5, "{s:?}");
+    }
+
+    #[test]
+    fn spheres_stay_inside_a_closed_mesh_and_cover_it() {
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 16);
+        let clustered = cluster(&mesh, 12);
+        assert_eq!(clustered.spheres.len(), 12);
+        for s in &clustered.spheres {
+            assert!(
+                s.center.length() + s.radius <= 1.0 + 1e-3,
+                "{s:?} pokes out"
+            );
+            assert!(s.radius > 0.15, "{s:?} is too small to stand for its patch");
+        }
+        // Every vertex belongs to exactly one cluster.
+        let mut seen: Vec<u32> = clustered.order.clone();
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), clustered.order.len());
+    }
+
+    #[test]
+    fn clustering_is_deterministic() {
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 12);
+        assert_eq!(cluster(&mesh, 8).spheres, cluster(&mesh, 8).spheres);
+    }
+
+    #[test]
+    fn more_clusters_than_vertices_gives_one_per_distinct_vertex_at_most() {
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        let mesh = RestMesh::new(positions, None, &[0, 1, 2], None, Vec::new(), 0).unwrap();
+        let clustered = cluster(&mesh, 100);
+        assert!(clustered.ranges.len() <= 3);
+        assert!(clustered.spheres.iter().all(|s| s.radius.is_finite()));
+    }
+
+    #[test]
+    fn closest_point_regions() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let cases = [
+            (Vec3::new(0.2, 0.2, 1.0), Vec3::new(0.2, 0.2, 0.0)),
+            (Vec3::new(-1.0, -1.0, 0.0), a),
+            (Vec3::new(2.0, -0.5, 0.0), b),
+            (Vec3::new(0.5, -1.0, 0.0), Vec3::new(0.5, 0.0, 0.0)),
+            (Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.5, 0.5, 0.0)),
+        ];
+        for (p, expected) in cases {
+            let q = closest_point_on_triangle(p, a, b, c);
+            assert!(
+                q.distance(expected) < 1e-5,
+                "{p} -> {q}, expected {expected}"
+            );
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! The pass that splats the spheres of every occluder into a view's far-field buffer.
+
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    diagnostic::RecordDiagnostics,
+    render_resource::{
+        LoadOp, Operations, PipelineCache, RenderPassColorAttachment, RenderPassDescriptor, StoreOp,
+    },
+    renderer::{RenderContext, ViewQuery},
+    view::ViewUniformOffset,
+};
+
+use super::splat::{SphereBuffer, SplatBindGroup, SplatPipeline};
+use crate::view::DynamicAoTextures;
+
+pub(crate) fn splat_pass(
+    view: ViewQuery<(&DynamicAoTextures, &SplatBindGroup, &ViewUniformOffset)>,
+    pipeline: Res<SplatPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    spheres: Res<SphereBuffer>,
+    mut ctx: RenderContext,
+) {
+    let (textures, bind_group, view_offset) = view.into_inner();
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    // Cleared even without spheres: compose reads this buffer whenever the far field is on.
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some("dynamic_ao_spheres"),
+        color_attachments: &[Some(RenderPassColorAttachment {
+            view: &textures.far_occlusion.default_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: Operations {
+                load: LoadOp::Clear(Default::default()),
+                store: StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_spheres");
+    if spheres.count > 0
+        && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline.pipeline)
+    {
+        pass.set_render_pipeline(render_pipeline);
+        pass.set_bind_group(0, &bind_group.0, &[view_offset.offset]);
+        pass.draw(0..6, 0..spheres.count);
+    }
+    pass_span.end(&mut pass);
+}

@@ -1,0 +1,314 @@
+//! Moving the rest-pose spheres with the deformed vertices, every frame (Shanmugam & Arikan 2007,
+//! §5.3: "we make use of the correspondence between the spheres and the underlying geometry to
+//! trivially recalculate the positions/radii of the spheres").
+//!
+//! For each cluster the deformed vertices give the new area-weighted centroid and spread; the
+//! sphere keeps its rest-pose offset from the centroid (turned by the cluster's blended joint
+//! matrix) and its rest-pose ratio of radius to spread. A cluster bound to one joint therefore
+//! moves exactly with that joint, and one that stretches grows with it. The cost is one skinning
+//! per vertex plus a few additions: linear in the vertex count.
+
+use bevy::math::{Affine3A, Mat3A, Vec3, Vec3A};
+
+use super::OccluderSphere;
+use super::lloyd::ClusteredMesh;
+use super::rest_mesh::RestMesh;
+
+/// The pose of one mesh this frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Pose<'a> {
+    /// Mesh space to world space; what a mesh without skin follows.
+    pub world_from_mesh: Affine3A,
+    /// Per joint of the skin: the joint's world transform × its inverse bind pose. Empty for a
+    /// mesh without skin. Like Bevy's skinning, a skinned mesh ignores `world_from_mesh`.
+    pub joints: &'a [Affine3A],
+    /// Morph target weights (missing ones count as 0).
+    pub morph_weights: &'a [f32],
+}
+
+/// Writes the world-space spheres of `clustered` in `pose` into `out` (cleared first). Spheres
+/// that come out non-finite (a NaN joint, say) are left out; the return value counts them.
+pub fn refit(
+    mesh: &RestMesh,
+    clustered: &ClusteredMesh,
+    pose: &Pose,
+    out: &mut Vec<OccluderSphere>,
+) -> usize {
+    out.clear();
+    let skin = mesh.skin.as_deref().filter(|_| !pose.joints.is_empty());
+    let morphing = mesh.morph_targets > 0 && pose.morph_weights.iter().any(|w| *w != 0.0);
+    let mut dropped = 0;
+    if skin.is_none() && !morphing {
+        // A rigid mesh: its spheres move with it and no vertex needs touching.
+        let scale = max_axis_scale(pose.world_from_mesh.matrix3);
+        for s in &clustered.spheres {
+            push_finite(
+                out,
+                &mut dropped,
+                pose.world_from_mesh.transform_point3(s.center),
+                s.radius * scale,
+            );
+        }
+        return dropped;
+    }
+
+    let morph_weights: Vec<(usize, f32)> = pose
+        .morph_weights
+        .iter()
+        .take(mesh.morph_targets)
+        .copied()
+        .enumerate()
+        .filter(|(_, w)| *w != 0.0)
+        .collect();
+    let vertex_count = mesh.positions.len();
+    let deform = |v: usize| -> Vec3A {
+        let mut p = Vec3A::from(mesh.positions[v]);
+        for &(target, weight) in &morph_weights {
+            p += Vec3A::from(mesh.morph_positions[target * vertex_count + v]) * weight;
+        }
+        match skin {
+            Some(skin) => {
+                let s = &skin[v];
+                let mut q = Vec3A::ZERO;
+                for k in 0..4 {
+                    if s.weights[k] > 0.0 {
+                        let joint = pose
+                            .joints
+                            .get(s.joints[k] as usize)
+                            .unwrap_or(&Affine3A::IDENTITY);
+                        q += joint.transform_point3a(p) * s.weights[k];
+                    }
+                }
+                q
+            }
+            None => pose.world_from_mesh.transform_point3a(p),
+        }
+    };
+
+    for (i, rest) in clustered.spheres.iter().enumerate() {
+        let (start, end) = clustered.ranges[i];
+        let members = &clustered.order[start as usize..end as usize];
+        // Sums relative to the first vertex keep the spread accurate far from the origin.
+        let origin = deform(members[0] as usize);
+        let (mut area, mut sum, mut sum2) = (0.0f32, Vec3A::ZERO, 0.0f32);
+        for &v in members {
+            let d = deform(v as usize) - origin;
+            let a = mesh.areas[v as usize];
+            area += a;
+            sum += d * a;
+            sum2 += d.length_squared() * a;
+        }
+        let mean = sum / area;
+        let spread = (sum2 / area - mean.length_squared()).max(0.0).sqrt();
+        let centroid = origin + mean;
+        let linear = match skin {
+            Some(_) => {
+                let mut m = Mat3A::ZERO;
+                for &(joint, w) in &clustered.sphere_joints[i] {
+                    let joint = pose
+                        .joints
+                        .get(joint as usize)
+                        .unwrap_or(&Affine3A::IDENTITY);
+                    m += joint.matrix3 * w;
+                }
+                m
+            }
+            None => pose.world_from_mesh.matrix3,
+        };
+        let center = Vec3::from(centroid + linear * Vec3A::from(rest.center - rest.centroid));
+        let radius = if rest.spread > 0.0 {
+            rest.radius * spread / rest.spread
+        } else {
+            0.0
+        };
+        push_finite(out, &mut dropped, center, radius);
+    }
+    dropped
+}
+
+fn push_finite(out: &mut Vec<OccluderSphere>, dropped: &mut usize, center: Vec3, radius: f32) {
+    if center.is_finite() && radius.is_finite() && radius > 0.0 {
+        out.push(OccluderSphere { center, radius });
+    } else {
+        *dropped += 1;
+    }
+}
+
+/// The largest factor by which `m` stretches any direction's axis: a radius that stays
+/// conservative under non-uniform scale.
+fn max_axis_scale(m: Mat3A) -> f32 {
+    m.x_axis
+        .length()
+        .max(m.y_axis.length())
+        .max(m.z_axis.length())
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy::math::{Quat, Vec3};
+
+    use super::*;
+    use crate::spheres::lloyd::cluster;
+    use crate::spheres::rest_mesh::VertexSkin;
+
+    /// A square column from y = 0 to y = 2, rings every 0.1 m; vertices below y = 1 follow
+    /// joint 0, the others joint 1.
+    fn two_bone_column() -> RestMesh {
+        let mut positions = Vec::new();
+        let mut skin = Vec::new();
+        let corners = [(-0.1, -0.1), (0.1, -0.1), (0.1, 0.1), (-0.1, 0.1)];
+        let rings = 21;
+        for r in 0..rings {
+            let y = r as f32 * 0.1;
+            for (x, z) in corners {
+                positions.push(Vec3::new(x, y, z));
+                let joint = if y < 1.0 { 0 } else { 1 };
+                skin.push(VertexSkin {
+                    joints: [joint, 0, 0, 0],
+                    weights: [1.0, 0.0, 0.0, 0.0],
+                });
+            }
+        }
+        let mut indices = Vec::new();
+        for r in 0..rings - 1 {
+            for k in 0..4 {
+                let (a, b) = (r * 4 + k, r * 4 + (k + 1) % 4);
+                let (c, d) = (a + 4, b + 4);
+                indices.extend([a, b, d, a, d, c]);
+            }
+        }
+        RestMesh::new(positions, None, &indices, Some(skin), Vec::new(), 0).unwrap()
+    }
+
+    fn skin_point(mesh: &RestMesh, joints: &[Affine3A], v: usize) -> Vec3 {
+        let s = mesh.skin.as_ref().unwrap()[v];
+        (0..4)
+            .map(|k| {
+                joints[s.joints[k] as usize].transform_point3(mesh.positions[v]) * s.weights[k]
+            })
+            .sum()
+    }
+
+    #[test]
+    fn spheres_of_a_limb_follow_its_bone() {
+        let mesh = two_bone_column();
+        let clustered = cluster(&mesh, 6);
+        // The upper bone bends 60° about the knee at y = 1 and the whole body moves.
+        let body = Affine3A::from_translation(Vec3::new(3.0, 0.0, -2.0));
+        let knee = Vec3::Y;
+        let bend = Affine3A::from_translation(knee)
+            * Affine3A::from_quat(Quat::from_rotation_z(1.0))
+            * Affine3A::from_translation(-knee);
+        let joints = [body, body * bend];
+        let pose = Pose {
+            world_from_mesh: Affine3A::IDENTITY,
+            joints: &joints,
+            morph_weights: &[],
+        };
+        let mut spheres = Vec::new();
+        assert_eq!(refit(&mesh, &clustered, &pose, &mut spheres), 0);
+        assert_eq!(spheres.len(), clustered.spheres.len());
+        let mut checked = 0;
+        for (i, (moved, rest)) in spheres.iter().zip(&clustered.spheres).enumerate() {
+            let (start, end) = clustered.ranges[i];
+            let members = &clustered.order[start as usize..end as usize];
+            let joints_used: Vec<u16> = members
+                .iter()
+                .map(|&v| mesh.skin.as_ref().unwrap()[v as usize].joints[0])
+                .collect();
+            // The centroid of the CPU-skinned vertices of the cluster.
+            let area: f32 = members.iter().map(|&v| mesh.areas[v as usize]).sum();
+            let centroid: Vec3 = members
+                .iter()
+                .map(|&v| skin_point(&mesh, &joints, v as usize) * mesh.areas[v as usize])
+                .sum::<Vec3>()
+                / area;
+            if joints_used.iter().all(|j| *j == joints_used[0]) {
+                let bone = joints[joints_used[0] as usize];
+                let expected = bone.transform_point3(rest.center);
+                assert!(
+                    moved.center.distance(expected) < 1e-4,
+                    "sphere {i}: {} vs {expected}",
+                    moved.center
+                );
+                assert!((moved.radius - rest.radius).abs() < 1e-4);
+                // The centre keeps its rest-pose offset from the skinned centroid.
+                let offset = bone.transform_vector3(rest.center - rest.centroid);
+                assert!((moved.center - centroid - offset).length() < 1e-4);
+                checked += 1;
+            }
+        }
+        assert!(checked >= 4, "only {checked} clusters lie on one bone");
+    }
+
+    #[test]
+    fn a_stretched_cluster_grows() {
+        let mesh = two_bone_column();
+        let clustered = cluster(&mesh, 2);
+        let stretch = Affine3A::from_scale(Vec3::splat(2.0));
+        let joints = [stretch, stretch];
+        let pose = Pose {
+            world_from_mesh: Affine3A::IDENTITY,
+            joints: &joints,
+            morph_weights: &[],
+        };
+        let mut spheres = Vec::new();
+        refit(&mesh, &clustered, &pose, &mut spheres);
+        for (moved, rest) in spheres.iter().zip(&clustered.spheres) {
+            assert!((moved.radius - 2.0 * rest.radius).abs() < 1e-4);
+            assert!(moved.center.distance(2.0 * rest.center) < 1e-4);
+        }
+    }
+
+    #[test]
+    fn morph_targets_move_the_spheres() {
+        let base = two_bone_column();
+        let count = base.positions.len();
+        // One target lifts every vertex by 0.5 m.
+        let mesh = RestMesh::new(
+            base.positions.clone(),
+            None,
+            &base
+                .triangles
+                .iter()
+                .flatten()
+                .map(|&i| i as usize)
+                .collect::<Vec<_>>(),
+            None,
+            vec![Vec3::new(0.0, 0.5, 0.0); count],
+            1,
+        )
+        .unwrap();
+        let clustered = cluster(&mesh, 3);
+        let mut spheres = Vec::new();
+        let pose = Pose {
+            world_from_mesh: Affine3A::from_translation(Vec3::X),
+            joints: &[],
+            morph_weights: &[0.5],
+        };
+        refit(&mesh, &clustered, &pose, &mut spheres);
+        for (moved, rest) in spheres.iter().zip(&clustered.spheres) {
+            let expected = rest.center + Vec3::new(1.0, 0.25, 0.0);
+            assert!(moved.center.distance(expected) < 1e-4);
+        }
+    }
+
+    #[test]
+    fn nan_joints_drop_spheres_instead_of_spreading_nan() {
+        let mesh = two_bone_column();
+        let clustered = cluster(&mesh, 4);
+        let mut broken = Affine3A::IDENTITY;
+        broken.translation.x = f32::NAN;
+        let joints = [Affine3A::IDENTITY, broken];
+        let pose = Pose {
+            world_from_mesh: Affine3A::IDENTITY,
+            joints: &joints,
+            morph_weights: &[],
+        };
+        let mut spheres = Vec::new();
+        let dropped = refit(&mesh, &clustered, &pose, &mut spheres);
+        assert!(dropped > 0);
+        assert!(!spheres.is_empty());
+        assert!(spheres.iter().all(|s| s.center.is_finite()));
+    }
+}

@@ -1,0 +1,163 @@
+//! Render-world side of the far field: the spheres of every occluder in one storage buffer, the
+//! billboard pipeline, and the per-view bind groups.
+
+use bevy::asset::load_embedded_asset;
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::math::Vec4;
+use bevy::render::{
+    Extract,
+    render_resource::{
+        binding_types::{
+            storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
+        },
+        *,
+    },
+    renderer::{RenderDevice, RenderQueue},
+    view::{ViewUniform, ViewUniforms},
+};
+use bevy::utils::default;
+
+use super::component::{OccluderSpheres, far_field_reach};
+use crate::view::{DynamicAoView, FAR_OCCLUSION_FORMAT};
+
+/// One sphere as the shader reads it: centre and radius, then d_far.
+type GpuSphere = [Vec4; 2];
+
+/// Every sphere of every occluder this frame, in one buffer all views share.
+#[derive(Resource)]
+pub(crate) struct SphereBuffer {
+    buffer: RawBufferVec<GpuSphere>,
+    /// Spheres to draw (the buffer holds one placeholder when there are none).
+    pub count: u32,
+}
+
+impl Default for SphereBuffer {
+    fn default() -> Self {
+        let mut buffer = RawBufferVec::new(BufferUsages::STORAGE);
+        buffer.set_label(Some("dynamic_ao_spheres"));
+        Self { buffer, count: 0 }
+    }
+}
+
+pub(crate) fn extract_spheres(
+    mut buffer: ResMut<SphereBuffer>,
+    occluders: Extract<Query<&OccluderSpheres>>,
+) {
+    buffer.buffer.clear();
+    for occluder in &occluders {
+        for sphere in &occluder.spheres {
+            let reach = far_field_reach(sphere.radius, occluder.epsilon);
+            buffer.buffer.push([
+                sphere.center.extend(sphere.radius),
+                Vec4::new(reach, 0.0, 0.0, 0.0),
+            ]);
+        }
+    }
+    buffer.count = buffer.buffer.len() as u32;
+    if buffer.count == 0 {
+        // A binding needs a buffer; nothing is drawn from it.
+        buffer.buffer.push([Vec4::ZERO; 2]);
+    }
+}
+
+pub(crate) fn write_sphere_buffer(
+    mut buffer: ResMut<SphereBuffer>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+) {
+    buffer.buffer.write_buffer(&device, &queue);
+}
+
+/// The billboard pipeline: instanced quads, additive blending into the far-field buffer.
+#[derive(Resource)]
+pub(crate) struct SplatPipeline {
+    layout: BindGroupLayoutDescriptor,
+    pub pipeline: CachedRenderPipelineId,
+}
+
+impl FromWorld for SplatPipeline {
+    fn from_world(world: &mut World) -> Self {
+        let layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_splat_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::VERTEX_FRAGMENT,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    storage_buffer_read_only_sized(false, None),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                ),
+            ),
+        );
+        let shader = load_embedded_asset!(world, "splat.wgsl");
+        let additive = BlendComponent {
+            src_factor: BlendFactor::One,
+            dst_factor: BlendFactor::One,
+            operation: BlendOperation::Add,
+        };
+        let pipeline =
+            world
+                .resource::<PipelineCache>()
+                .queue_render_pipeline(RenderPipelineDescriptor {
+                    label: Some("dynamic_ao_splat_pipeline".into()),
+                    layout: vec![layout.clone()],
+                    vertex: VertexState {
+                        shader: shader.clone(),
+                        ..default()
+                    },
+                    fragment: Some(FragmentState {
+                        shader,
+                        targets: vec![Some(ColorTargetState {
+                            format: FAR_OCCLUSION_FORMAT,
+                            blend: Some(BlendState {
+                                color: additive,
+                                alpha: additive,
+                            }),
+                            write_mask: ColorWrites::RED,
+                        })],
+                        ..default()
+                    }),
+                    ..default()
+                });
+        Self { layout, pipeline }
+    }
+}
+
+#[derive(Component)]
+pub(crate) struct SplatBindGroup(pub BindGroup);
+
+pub(crate) fn prepare_splat_bind_groups(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    pipeline: Res<SplatPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    view_uniforms: Res<ViewUniforms>,
+    spheres: Res<SphereBuffer>,
+    views: Query<(Entity, &DynamicAoView, &ViewPrepassTextures)>,
+) {
+    let (Some(view_binding), Some(sphere_binding)) =
+        (view_uniforms.uniforms.binding(), spheres.buffer.binding())
+    else {
+        return;
+    };
+    for (entity, view, prepass) in &views {
+        let (true, Some(depth), Some(normal)) =
+            (view.far_field, prepass.depth_view(), prepass.normal_view())
+        else {
+            commands.entity(entity).remove::<SplatBindGroup>();
+            continue;
+        };
+        let bind_group = render_device.create_bind_group(
+            "dynamic_ao_splat_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipeline.layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                sphere_binding.clone(),
+                depth,
+                normal,
+            )),
+        );
+        commands.entity(entity).insert(SplatBindGroup(bind_group));
+    }
+}

@@ -1,0 +1,255 @@
+//! Main-world systems: clustering each mesh once (cached, off the main thread for large meshes)
+//! and refitting its spheres every frame after animation and transform propagation.
+
+use std::sync::Arc;
+
+use bevy::asset::{AssetEvent, AssetId, Assets};
+use bevy::camera::visibility::InheritedVisibility;
+use bevy::ecs::prelude::*;
+use bevy::log::warn;
+use bevy::math::Affine3A;
+use bevy::mesh::morph::{MeshMorphWeights, MorphWeights};
+use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
+use bevy::mesh::{Mesh, Mesh3d};
+use bevy::platform::collections::{HashMap, HashSet};
+use bevy::prelude::{Children, GlobalTransform, Name};
+use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
+
+use super::component::{OccluderSpheres, SphereOccluder};
+use super::lloyd::{ClusteredMesh, cluster};
+use super::refit::{Pose, refit};
+use super::rest_mesh::{RestMesh, SphereMeshError};
+
+/// Meshes with more vertices than this are clustered on the async compute pool, so loading a
+/// large character never stalls a frame; smaller ones are clustered at once.
+pub const ASYNC_CLUSTERING_VERTICES: usize = 2048;
+
+/// A mesh clustered for one sphere count.
+pub(crate) struct FittedMesh {
+    pub mesh: RestMesh,
+    pub clustered: ClusteredMesh,
+    /// Vertices that carry surface area: the most clusters this mesh can have.
+    pub clusterable_vertices: usize,
+}
+
+type FitResult = Result<Arc<FittedMesh>, SphereMeshError>;
+
+/// Clustering results per (mesh asset, sphere count), and the clusterings still running.
+#[derive(Resource, Default)]
+pub(crate) struct SphereCache {
+    ready: HashMap<(AssetId<Mesh>, u32), FitResult>,
+    pending: HashMap<(AssetId<Mesh>, u32), Task<FitResult>>,
+}
+
+impl SphereCache {
+    /// The clustering of `id` for `count` spheres: started if new, `None` while it runs.
+    fn get(&mut self, id: AssetId<Mesh>, count: u32, meshes: &Assets<Mesh>) -> Option<FitResult> {
+        let key = (id, count);
+        if let Some(result) = self.ready.get(&key) {
+            return Some(result.clone());
+        }
+        if let Some(task) = self.pending.get_mut(&key) {
+            let result = check_ready(task)?;
+            self.pending.remove(&key);
+            self.ready.insert(key, result.clone());
+            return Some(result);
+        }
+        let mesh = meshes.get(id)?;
+        let rest = match RestMesh::from_mesh(mesh) {
+            Ok(rest) => rest,
+            Err(error) => {
+                self.ready.insert(key, Err(error.clone()));
+                return Some(Err(error));
+            }
+        };
+        if rest.positions.len() > ASYNC_CLUSTERING_VERTICES {
+            let task = AsyncComputeTaskPool::get().spawn(async move { Ok(fit(rest, count)) });
+            self.pending.insert(key, task);
+            return None;
+        }
+        let result: FitResult = Ok(fit(rest, count));
+        self.ready.insert(key, result.clone());
+        Some(result)
+    }
+
+    /// Forgets every clustering of a mesh whose asset changed or went away.
+    fn forget(&mut self, id: AssetId<Mesh>) {
+        self.ready.retain(|(mesh, _), _| *mesh != id);
+        self.pending.retain(|(mesh, _), _| *mesh != id);
+    }
+}
+
+fn fit(mesh: RestMesh, count: u32) -> Arc<FittedMesh> {
+    let clustered = cluster(&mesh, count);
+    let clusterable_vertices = mesh.areas.iter().filter(|a| **a > 0.0).count();
+    Arc::new(FittedMesh {
+        mesh,
+        clustered,
+        clusterable_vertices,
+    })
+}
+
+pub(crate) fn forget_changed_meshes(
+    mut events: MessageReader<AssetEvent<Mesh>>,
+    mut cache: ResMut<SphereCache>,
+) {
+    for event in events.read() {
+        match event {
+            AssetEvent::Modified { id }
+            | AssetEvent::Removed { id }
+            | AssetEvent::Unused { id } => cache.forget(*id),
+            _ => {}
+        }
+    }
+}
+
+/// A problem reported once per mesh entity.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(crate) enum Problem {
+    Unusable,
+    FewVertices,
+    SkinWithoutJointData,
+    MissingJoint,
+    NonFinite,
+}
+
+type MeshQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Mesh3d,
+        &'static GlobalTransform,
+        Option<&'static SkinnedMesh>,
+        Option<&'static MeshMorphWeights>,
+        Option<&'static InheritedVisibility>,
+        Option<&'static mut OccluderSpheres>,
+        Option<&'static Name>,
+    ),
+>;
+
+/// Every mesh under a [`SphereOccluder`] gets its spheres for this frame.
+pub(crate) fn refit_spheres(
+    mut commands: Commands,
+    occluders: Query<(Entity, &SphereOccluder)>,
+    children: Query<&Children>,
+    mut mesh_entities: MeshQuery,
+    transforms: Query<&GlobalTransform>,
+    morph_weights: Query<&MorphWeights>,
+    with_spheres: Query<Entity, With<OccluderSpheres>>,
+    meshes: Res<Assets<Mesh>>,
+    inverse_bindposes: Res<Assets<SkinnedMeshInverseBindposes>>,
+    mut cache: ResMut<SphereCache>,
+    mut warned: Local<HashSet<(Entity, Problem)>>,
+    mut joints: Local<Vec<Affine3A>>,
+) {
+    // A mesh's own occluder wins over one on an ancestor.
+    let mut targets: HashMap<Entity, SphereOccluder> = HashMap::default();
+    for (root, occluder) in &occluders {
+        let occluder = occluder.sanitized();
+        targets.insert(root, occluder);
+        for entity in children.iter_descendants(root) {
+            if !occluders.contains(entity) {
+                targets.entry(entity).or_insert(occluder);
+            }
+        }
+    }
+    for entity in &with_spheres {
+        if !targets.contains_key(&entity) || !mesh_entities.contains(entity) {
+            commands.entity(entity).remove::<OccluderSpheres>();
+        }
+    }
+
+    for (&entity, occluder) in &targets {
+        let Ok((mesh3d, transform, skinned, morphs, visibility, spheres, name)) =
+            mesh_entities.get_mut(entity)
+        else {
+            continue;
+        };
+        let mut warn_once = |problem: Problem, message: &dyn Fn() -> String| {
+            if warned.insert((entity, problem)) {
+                let label =
+                    name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
+                warn!("SphereOccluder: mesh {label} {}", message());
+            }
+        };
+        let mut out = OccluderSpheres {
+            spheres: Vec::new(),
+            epsilon: occluder.epsilon,
+        };
+        let fitted = match cache.get(mesh3d.id(), occluder.count, &meshes) {
+            Some(Ok(fitted)) => Some(fitted),
+            Some(Err(error)) => {
+                warn_once(Problem::Unusable, &|| {
+                    format!("casts no far-field occlusion: {error}")
+                });
+                None
+            }
+            None => None,
+        };
+        if let Some(fitted) = fitted
+            && visibility.is_none_or(|v| v.get())
+        {
+            if fitted.clusterable_vertices < occluder.count as usize {
+                warn_once(Problem::FewVertices, &|| {
+                    format!(
+                        "asks for {} spheres but has only {} usable vertices; it gets {}",
+                        occluder.count,
+                        fitted.clusterable_vertices,
+                        fitted.clustered.spheres.len()
+                    )
+                });
+            }
+            joints.clear();
+            if let Some(skinned) = skinned {
+                if fitted.mesh.skin.is_none() {
+                    warn_once(Problem::SkinWithoutJointData, &|| {
+                        "has a SkinnedMesh but no joint index/weight attributes; its spheres \
+                         follow its transform"
+                            .to_string()
+                    });
+                } else if let Some(bindposes) = inverse_bindposes.get(&skinned.inverse_bindposes) {
+                    for (i, joint) in skinned.joints.iter().enumerate() {
+                        let world = transforms.get(*joint).map(|t| t.affine());
+                        if world.is_err() {
+                            warn_once(Problem::MissingJoint, &|| {
+                                "has a joint entity that does not exist; that joint counts as \
+                                 the identity"
+                                    .to_string()
+                            });
+                        }
+                        let bindpose = bindposes.get(i).copied().unwrap_or_default();
+                        joints.push(world.unwrap_or_default() * Affine3A::from_mat4(bindpose));
+                    }
+                }
+            }
+            let weights: &[f32] = match morphs {
+                Some(MeshMorphWeights::Value { weights }) => weights,
+                Some(MeshMorphWeights::Reference(owner)) => morph_weights
+                    .get(*owner)
+                    .map(|w| w.weights())
+                    .unwrap_or_default(),
+                None => &[],
+            };
+            let pose = Pose {
+                world_from_mesh: transform.affine(),
+                joints: &joints,
+                morph_weights: weights,
+            };
+            let dropped = refit(&fitted.mesh, &fitted.clustered, &pose, &mut out.spheres);
+            if dropped > 0 {
+                warn_once(Problem::NonFinite, &|| {
+                    format!(
+                        "has a non-finite transform, joint or morph weight; {dropped} of its \
+                         spheres are left out while it lasts"
+                    )
+                });
+            }
+        }
+        match spheres {
+            Some(mut spheres) => *spheres = out,
+            None => {
+                commands.entity(entity).insert(out);
+            }
+        }
+    }
+}
