@@ -18,6 +18,9 @@ use crate::reference::scene::Triangle;
 /// Most Lloyd iterations; clustering usually settles well before.
 const MAX_ITERATIONS: usize = 32;
 
+/// Share of the distance to the nearest triangle a sphere may fill.
+const INSIDE_MARGIN: f32 = 0.95;
+
 /// One sphere in the rest pose, with what the per-frame refit needs to move it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RestSphere {
@@ -27,7 +30,8 @@ pub struct RestSphere {
     pub radius: f32,
     /// Area-weighted centroid of the cluster's vertices, mesh space.
     pub centroid: Vec3,
-    /// Area-weighted RMS distance of the cluster's vertices from `centroid`, metres.
+    /// Area-weighted RMS distance of the cluster's vertices from `centroid` (0 when they
+    /// coincide), metres.
     pub spread: f32,
 }
 
@@ -194,9 +198,14 @@ fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere>
         bvh.closest_hit(centroid, inward, 1e-5 * spread.max(1e-6), f32::INFINITY)
             .map_or(f32::INFINITY, |hit| hit.t)
     };
-    let shift = (spread * mean_normal.length()).min(0.5 * thickness);
+    // Vertices that coincide (the corners of a low-poly box) have no spread; the patch's area
+    // still says how large it is: a sphere with the same surface area.
+    let size = spread.max((area / (4.0 * std::f32::consts::PI)).sqrt());
+    let shift = (size * mean_normal.length()).min(0.5 * thickness);
     let center = centroid + inward * shift;
-    let radius = spread.min(nearest_surface_distance(mesh, center));
+    // The margin keeps the object's own surface out of the sphere: inside, A_ψ = 1 would black
+    // out the very pixels the sphere stands for.
+    let radius = size.min(INSIDE_MARGIN * nearest_surface_distance(mesh, center));
     (radius > 1e-6 && radius.is_finite()).then_some(RestSphere {
         center,
         radius,
@@ -312,8 +321,8 @@ mod tests {
         assert_eq!(clustered.spheres.len(), 1);
         let s = clustered.spheres[0];
         assert!(s.center.distance(Vec3::new(1.0, 2.0, 3.0)) < 0.01, "{s:?}");
-        // The inscribed sphere of the tessellation is a little smaller than the ideal one.
-        assert!(s.radius > 0.47 && s.radius <= 0.5, "{s:?}");
+        // The inscribed sphere of the tessellation, less the margin.
+        assert!(s.radius > 0.45 && s.radius <= 0.475, "{s:?}");
     }
 
     #[test]
@@ -348,6 +357,29 @@ mod tests {
         let clustered = cluster(&mesh, 100);
         assert!(clustered.ranges.len() <= 3);
         assert!(clustered.spheres.iter().all(|s| s.radius.is_finite()));
+    }
+
+    #[test]
+    fn a_low_poly_box_gets_spheres_inside_it() {
+        let box_mesh: bevy::mesh::Mesh = bevy::math::primitives::Cuboid::new(1.0, 1.0, 1.0).into();
+        let mesh = RestMesh::from_mesh(&box_mesh).unwrap();
+        let one = cluster(&mesh, 1);
+        assert_eq!(one.spheres.len(), 1);
+        assert!(one.spheres[0].center.length() < 1e-4);
+        assert!(
+            (one.spheres[0].radius - 0.475).abs() < 1e-4,
+            "{:?}",
+            one.spheres[0]
+        );
+        // Sixteen asked, eight distinct corners: eight spheres, each inside the box.
+        let corners = cluster(&mesh, 16);
+        assert_eq!(corners.spheres.len(), 8);
+        for s in &corners.spheres {
+            assert!(
+                s.center.abs().max_element() + s.radius <= 0.5 + 1e-4,
+                "{s:?}"
+            );
+        }
     }
 
     #[test]

@@ -116,10 +116,11 @@ pub fn refit(
             None => pose.world_from_mesh.matrix3,
         };
         let center = Vec3::from(centroid + linear * Vec3A::from(rest.center - rest.centroid));
-        let radius = if rest.spread > 0.0 {
+        let radius = if rest.spread > 1e-4 * rest.radius {
             rest.radius * spread / rest.spread
         } else {
-            0.0
+            // Coinciding vertices carry no size; the joints' scale does.
+            rest.radius * max_axis_scale(linear)
         };
         push_finite(out, &mut dropped, center, radius);
     }

@@ -35,6 +35,8 @@ pub struct SceneSpec {
     pub ambient: f32,
     /// Illuminance of a directional light shining along this transform's forward, if any.
     pub sun: Option<(Transform, f32)>,
+    /// Meshes (by index into `meshes`) that carry a sphere occluder.
+    pub occluders: Vec<(usize, SphereOccluder)>,
 }
 
 impl SceneSpec {
@@ -44,12 +46,24 @@ impl SceneSpec {
             camera,
             ambient: 500.0,
             sun: None,
+            occluders: Vec::new(),
         }
     }
 
     pub fn with(mut self, mesh: impl Into<Mesh>, transform: Transform) -> Self {
         self.meshes.push((mesh.into(), transform));
         self
+    }
+
+    /// Adds a mesh that casts far-field occlusion through `occluder`.
+    pub fn with_occluder(
+        mut self,
+        mesh: impl Into<Mesh>,
+        transform: Transform,
+        occluder: SphereOccluder,
+    ) -> Self {
+        self.occluders.push((self.meshes.len(), occluder));
+        self.with(mesh, transform)
     }
 
     /// The same triangles for the CPU ray tracer.
@@ -164,9 +178,13 @@ impl Gpu {
                 reflectance: 0.0,
                 ..default()
             });
-        for (mesh, transform) in &scene.meshes {
+        for (i, (mesh, transform)) in scene.meshes.iter().enumerate() {
             let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh.clone());
-            world.spawn((Mesh3d(mesh), MeshMaterial3d(material.clone()), *transform));
+            let mut entity =
+                world.spawn((Mesh3d(mesh), MeshMaterial3d(material.clone()), *transform));
+            if let Some((_, occluder)) = scene.occluders.iter().find(|(k, _)| *k == i) {
+                entity.insert(*occluder);
+            }
         }
         if let Some((transform, illuminance)) = scene.sun {
             world.spawn((

@@ -20,3 +20,4 @@ mod ray_march;
 mod scenes;
 mod shared_assets;
 mod skinned;
+mod spheres;
