@@ -7,7 +7,9 @@
 //!     [--half-res] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
-//! `--technique list` prints the technique names. Bevy's own SSAO (`bevy-ssao`) has a radius
+//! `--technique list` prints the technique names: the image-space ones, `spheres` (the far field
+//! of sphere occluders alone, with a `SphereOccluder` on the scene root so every mesh casts it)
+//! and each image-space one with `+spheres` added. Bevy's own SSAO (`bevy-ssao`) has a radius
 //! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
 
 #[path = "../common/mod.rs"]
@@ -171,10 +173,17 @@ fn scene_ready(
                 ..default()
             },
             half_resolution: options.half_resolution,
+            spheres: options.spheres,
             ..default()
         },
         readback.clone(),
     ));
+    if options.spheres {
+        // On the root, so every mesh of the scene casts far-field occlusion.
+        commands
+            .entity(ready.entity)
+            .insert(SphereOccluder::default());
+    }
     capture.readback = Some(readback);
 
     if let Some(clip) = gltfs
@@ -255,7 +264,7 @@ fn drive(
                 println!(
                     "ao_capture: {} technique {} radius {} -> {} (mean visibility {open:.4})",
                     options.scene.display(),
-                    options.technique.name(),
+                    options.technique_name(),
                     options.radius,
                     options.out_ao.display()
                 );

@@ -14,6 +14,40 @@ pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
 const MAX_SIZE: u32 = 8192;
 
+/// The far field alone.
+const SPHERES: &str = "spheres";
+/// Suffix that adds the far field to an image-space technique.
+const PLUS_SPHERES: &str = "+spheres";
+
+/// Every name `--technique` takes: the plugin's techniques, the far field alone, and each
+/// image-space technique with the far field added.
+pub fn technique_names() -> Vec<String> {
+    let mut names: Vec<String> = AoTechnique::ALL
+        .iter()
+        .map(|(n, _)| n.to_string())
+        .collect();
+    names.push(SPHERES.into());
+    for (name, technique) in AoTechnique::ALL {
+        if !matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) {
+            names.push(format!("{name}{PLUS_SPHERES}"));
+        }
+    }
+    names
+}
+
+/// A technique name: the image-space technique and whether the far field of spheres is on.
+fn parse_technique(name: &str) -> Option<(AoTechnique, bool)> {
+    if name == SPHERES {
+        return Some((AoTechnique::Off, true));
+    }
+    match name.strip_suffix(PLUS_SPHERES) {
+        Some(base) => AoTechnique::from_name(base)
+            .filter(|t| !matches!(t, AoTechnique::Off | AoTechnique::BevySsao))
+            .map(|t| (t, true)),
+        None => AoTechnique::from_name(name).map(|t| (t, false)),
+    }
+}
+
 /// What one capture does.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -23,6 +57,8 @@ pub struct Options {
     /// World-space AO radius, metres.
     pub radius: f32,
     pub technique: AoTechnique,
+    /// Far-field occlusion from spheres on every mesh of the scene.
+    pub spheres: bool,
     pub preset: AoQuality,
     /// Half-width of the cross-bilateral blur, pixels (0 = off).
     pub blur: u32,
@@ -37,6 +73,15 @@ pub struct Options {
 }
 
 impl Options {
+    /// The technique as `--technique` names it.
+    pub fn technique_name(&self) -> String {
+        match (self.technique, self.spheres) {
+            (AoTechnique::Off, true) => SPHERES.into(),
+            (technique, true) => format!("{}{PLUS_SPHERES}", technique.name()),
+            (technique, false) => technique.name().into(),
+        }
+    }
+
     /// `Ok(None)`: a listing or help was printed, nothing to render.
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
         let (mut scene, mut width, mut height, mut radius, mut technique) =
@@ -64,15 +109,14 @@ impl Options {
                 "--technique" => {
                     let name = value()?;
                     if name == "list" {
-                        for (name, _) in AoTechnique::ALL {
+                        for name in technique_names() {
                             println!("{name}");
                         }
                         return Ok(None);
                     }
-                    let names: Vec<&str> = AoTechnique::ALL.iter().map(|(n, _)| *n).collect();
-                    technique = Some(AoTechnique::from_name(&name).ok_or(format!(
+                    technique = Some(parse_technique(&name).ok_or(format!(
                         "unknown technique '{name}' (known: {})",
-                        names.join(", ")
+                        technique_names().join(", ")
                     ))?);
                 }
                 "--preset" => {
@@ -128,7 +172,10 @@ impl Options {
             width: width.ok_or_else(|| missing("--width"))?,
             height: height.ok_or_else(|| missing("--height"))?,
             radius: radius.ok_or_else(|| missing("--radius"))?,
-            technique: technique.ok_or_else(|| missing("--technique"))?,
+            technique: technique
+                .map(|(t, _)| t)
+                .ok_or_else(|| missing("--technique"))?,
+            spheres: technique.is_some_and(|(_, spheres)| spheres),
             preset,
             blur,
             half_resolution,

@@ -99,24 +99,8 @@ pub fn cube_on_plane() -> (Vec<MeshData>, Vec<Node>) {
 
 /// Encodes meshes and nodes as a `.glb` file.
 pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views: Vec<Value> = Vec::new();
-    let mut accessors: Vec<Value> = Vec::new();
-    let mut push = |bytes: Vec<u8>, target: Option<u32>, accessor: Value| -> usize {
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() });
-        if let Some(target) = target {
-            view["target"] = json!(target);
-        }
-        bin.extend(bytes);
-        views.push(view);
-        let mut accessor = accessor;
-        accessor["bufferView"] = json!(views.len() - 1);
-        accessors.push(accessor);
-        accessors.len() - 1
-    };
+    let mut glb = GlbBuilder::default();
+    let mut push = |bytes, target, accessor| glb.push(bytes, target, accessor);
     let floats = |v: &[[f32; 3]]| {
         v.iter()
             .flatten()
@@ -205,9 +189,6 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
         "meshes": mesh_json,
         "materials": [{ "pbrMetallicRoughness": {
             "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9 } }],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{ "byteLength": bin.len() }],
     });
     if !cameras.is_empty() {
         doc["cameras"] = json!(cameras);
@@ -216,23 +197,60 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
         doc["animations"] =
             json!([{ "name": "slide", "channels": channels, "samplers": samplers }]);
     }
-    let mut text = serde_json::to_vec(&doc).expect("glTF JSON serializes");
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
+    glb.finish(doc)
+}
+
+/// Collects the binary chunk of a `.glb` and the accessors and buffer views that point into it.
+#[derive(Default)]
+pub struct GlbBuilder {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl GlbBuilder {
+    /// Appends `bytes` as a buffer view (with `target`, if any) and `accessor` over it; returns
+    /// the accessor's index.
+    pub fn push(&mut self, bytes: Vec<u8>, target: Option<u32>, mut accessor: Value) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut view =
+            json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        self.bin.extend(bytes);
+        self.views.push(view);
+        accessor["bufferView"] = json!(self.views.len() - 1);
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
     }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
+
+    /// The `.glb` file of `doc` with the collected accessors, views and binary chunk.
+    pub fn finish(self, mut doc: Value) -> Vec<u8> {
+        let mut bin = self.bin;
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        doc["accessors"] = json!(self.accessors);
+        doc["bufferViews"] = json!(self.views);
+        doc["buffers"] = json!([{ "byteLength": bin.len() }]);
+        let mut text = serde_json::to_vec(&doc).expect("glTF JSON serializes");
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let total = 12 + 8 + text.len() + 8 + bin.len();
+        let mut glb = Vec::with_capacity(total);
+        glb.extend(b"glTF");
+        glb.extend(2u32.to_le_bytes());
+        glb.extend((total as u32).to_le_bytes());
+        glb.extend((text.len() as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(text);
+        glb.extend((bin.len() as u32).to_le_bytes());
+        glb.extend(b"BIN\0");
+        glb.extend(bin);
+        glb
     }
-    let total = 12 + 8 + text.len() + 8 + bin.len();
-    let mut glb = Vec::with_capacity(total);
-    glb.extend(b"glTF");
-    glb.extend(2u32.to_le_bytes());
-    glb.extend((total as u32).to_le_bytes());
-    glb.extend((text.len() as u32).to_le_bytes());
-    glb.extend(b"JSON");
-    glb.extend(text);
-    glb.extend((bin.len() as u32).to_le_bytes());
-    glb.extend(b"BIN\0");
-    glb.extend(bin);
-    glb
 }

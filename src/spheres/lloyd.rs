@@ -18,6 +18,9 @@ use crate::reference::scene::Triangle;
 /// Most Lloyd iterations; clustering usually settles well before.
 const MAX_ITERATIONS: usize = 32;
 
+/// Places tried along the inward direction of a patch for its sphere.
+const INWARD_STEPS: u32 = 16;
+
 /// Share of the distance to the nearest triangle a sphere may fill.
 const INSIDE_MARGIN: f32 = 0.95;
 
@@ -191,21 +194,33 @@ fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere>
         .sum::<f32>()
         / area)
         .sqrt();
+    // Vertices that coincide (the corners of a low-poly box) have no spread; the patch's area
+    // still says how large it is: a sphere with the same surface area.
+    let size = spread.max((area / (4.0 * std::f32::consts::PI)).sqrt());
+    // Walk inwards from the centroid to where the largest sphere fits (no larger than the patch):
+    // a patch on a thick body gets a sphere of its own size touching it, a box corner one that
+    // fills its octant, a thin wall one as thick as the wall. A patch that wraps around a limb
+    // has no inward direction; its centroid already lies inside.
     let inward = -mean_normal.normalize_or_zero();
     let thickness = if inward == Vec3::ZERO {
         0.0
     } else {
-        bvh.closest_hit(centroid, inward, 1e-5 * spread.max(1e-6), f32::INFINITY)
+        bvh.closest_hit(centroid, inward, 1e-5 * size, f32::INFINITY)
             .map_or(f32::INFINITY, |hit| hit.t)
     };
-    // Vertices that coincide (the corners of a low-poly box) have no spread; the patch's area
-    // still says how large it is: a sphere with the same surface area.
-    let size = spread.max((area / (4.0 * std::f32::consts::PI)).sqrt());
-    let shift = (size * mean_normal.length()).min(0.5 * thickness);
-    let center = centroid + inward * shift;
+    let depth = (2.0 * size).min(thickness);
     // The margin keeps the object's own surface out of the sphere: inside, A_ψ = 1 would black
     // out the very pixels the sphere stands for.
-    let radius = size.min(INSIDE_MARGIN * nearest_surface_distance(mesh, center));
+    let fits =
+        |t: f32| size.min(INSIDE_MARGIN * nearest_surface_distance(mesh, centroid + inward * t));
+    let (mut center, mut radius) = (centroid, fits(0.0));
+    for step in 1..=INWARD_STEPS {
+        let t = depth * step as f32 / INWARD_STEPS as f32;
+        let r = fits(t);
+        if r > radius * (1.0 + 1e-4) {
+            (center, radius) = (centroid + inward * t, r);
+        }
+    }
     (radius > 1e-6 && radius.is_finite()).then_some(RestSphere {
         center,
         radius,

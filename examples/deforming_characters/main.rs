@@ -1,0 +1,243 @@
+//! Skinned characters walking near each other and a wall: their far-field occlusion comes from
+//! spheres that are refit to the animated skin every frame (`SphereOccluder`), added to the
+//! image-space near field. The walker is the project's own generated asset
+//! (`assets/characters/walker.glb`, written by `cargo run --example generate_assets`).
+//!
+//! Windowed: `cargo run --example deforming_characters`.
+//! Headless: `cargo run --example deforming_characters -- --headless --frames 20 --out walkers.png`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::gltf::GltfAssetLabel;
+use bevy::prelude::*;
+use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
+use bevy_dynamic_ao::prelude::*;
+use common::{ExampleArgs, HelpLine};
+
+const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
+[--width W] [--height H] [--characters N] [--show-spheres] [--debug-view]
+keys: N near field on/off, F far field (spheres) on/off, S show spheres, D debug view, Esc quit";
+
+const WALKER: &str = "characters/walker.glb";
+
+fn main() {
+    let args = ExampleArgs::parse(USAGE);
+    let mut options = Options {
+        characters: 6,
+        show_spheres: false,
+        debug_view: false,
+    };
+    let mut rest = args.rest.iter();
+    while let Some(flag) = rest.next() {
+        match flag.as_str() {
+            "--show-spheres" => options.show_spheres = true,
+            "--debug-view" => options.debug_view = true,
+            "--characters" => {
+                let value = rest.next().map(String::as_str).unwrap_or("");
+                match common::parse_number("--characters", value, 1u32) {
+                    Ok(n) => options.characters = n.min(200),
+                    Err(message) => {
+                        eprintln!("error: {message}\n{USAGE}");
+                        std::process::exit(2);
+                    }
+                }
+            }
+            unknown => {
+                eprintln!("error: unknown argument '{unknown}'\n{USAGE}");
+                std::process::exit(2);
+            }
+        }
+    }
+    let mut app = common::example_app("bevy_dynamic_ao: deforming characters", &args);
+    app.insert_resource(options)
+        .add_plugins(DynamicAoPlugin)
+        .add_systems(Startup, setup)
+        .add_systems(Update, (walk, controls, show_settings))
+        .run();
+}
+
+#[derive(Resource, Clone, Copy)]
+struct Options {
+    characters: u32,
+    show_spheres: bool,
+    debug_view: bool,
+}
+
+/// A walker following a circle: centre, radius (metres), angular speed (radians per second),
+/// starting angle.
+#[derive(Component)]
+struct Path {
+    centre: Vec3,
+    radius: f32,
+    speed: f32,
+    phase: f32,
+}
+
+#[derive(Resource)]
+struct WalkAnimation {
+    graph: Handle<AnimationGraph>,
+    node: AnimationNodeIndex,
+}
+
+fn setup(world: &mut World) {
+    let options = *world.resource::<Options>();
+    world.resource_mut::<ShowOccluderSpheres>().0 = options.show_spheres;
+    let target = common::camera_target(world);
+    let assets = world.resource::<AssetServer>().clone();
+    let clip = assets.load(GltfAssetLabel::Animation(0).from_asset(WALKER));
+    let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(WALKER));
+    let (graph, node) = AnimationGraph::from_clip(clip);
+    let graph = world.resource_mut::<Assets<AnimationGraph>>().add(graph);
+    world.insert_resource(WalkAnimation { graph, node });
+
+    let mut commands = world.commands();
+    let mut camera = commands.spawn((
+        Camera3d::default(),
+        Transform::from_xyz(0.0, 3.4, 6.4).looking_at(Vec3::new(0.0, 0.6, -0.4), Vec3::Y),
+        Msaa::Off,
+        Tonemapping::AcesFitted,
+        DynamicAo {
+            debug_view: options.debug_view,
+            ..default()
+        },
+        AmbientLight {
+            brightness: 1200.0,
+            ..default()
+        },
+    ));
+    if let Some(target) = target {
+        camera.insert(target);
+    }
+    common::spawn_help_line(&mut commands);
+    world.flush();
+
+    let mut meshes = world.resource_mut::<Assets<Mesh>>();
+    let floor = meshes.add(Plane3d::default().mesh().size(14.0, 14.0));
+    let wall = meshes.add(Cuboid::new(14.0, 3.0, 0.2));
+    let mut materials = world.resource_mut::<Assets<StandardMaterial>>();
+    let white = materials.add(StandardMaterial {
+        base_color: Color::srgb(0.85, 0.85, 0.82),
+        perceptual_roughness: 0.9,
+        ..default()
+    });
+    let mut commands = world.commands();
+    commands.spawn((Mesh3d(floor), MeshMaterial3d(white.clone())));
+    commands.spawn((
+        Mesh3d(wall),
+        MeshMaterial3d(white),
+        Transform::from_xyz(0.0, 1.5, -2.2),
+    ));
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 2_000.0,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(2.0, 6.0, 3.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    for i in 0..options.characters {
+        // Rings of walkers; neighbours walk in opposite directions so they pass close by.
+        let ring = i / 6;
+        let slot = i % 6;
+        let path = Path {
+            centre: Vec3::new(
+                -2.4 + 1.6 * (slot % 3) as f32,
+                0.0,
+                -0.6 + 1.5 * (slot / 3) as f32 + 3.0 * ring as f32,
+            ),
+            radius: 0.7 + 0.1 * slot as f32,
+            speed: if slot % 2 == 0 { 0.9 } else { -0.8 },
+            phase: slot as f32 * 1.1,
+        };
+        commands
+            .spawn((
+                WorldAssetRoot(scene.clone()),
+                SphereOccluder::default(),
+                Transform::default(),
+                path,
+            ))
+            .observe(start_walking);
+    }
+}
+
+/// Once a walker's scene exists, its animation player starts the walk cycle at its own phase.
+fn start_walking(
+    ready: On<WorldInstanceReady>,
+    mut commands: Commands,
+    animation: Res<WalkAnimation>,
+    children: Query<&Children>,
+    mut players: Query<&mut AnimationPlayer>,
+    paths: Query<&Path>,
+) {
+    let phase = paths.get(ready.entity).map_or(0.0, |p| p.phase);
+    for entity in children.iter_descendants(ready.entity) {
+        if let Ok(mut player) = players.get_mut(entity) {
+            player
+                .play(animation.node)
+                .repeat()
+                .seek_to(phase.rem_euclid(1.0));
+            commands
+                .entity(entity)
+                .insert(AnimationGraphHandle(animation.graph.clone()));
+        }
+    }
+}
+
+fn walk(time: Res<Time>, mut walkers: Query<(&Path, &mut Transform)>) {
+    let t = time.elapsed_secs();
+    for (path, mut transform) in &mut walkers {
+        let angle = path.phase + path.speed * t;
+        let offset = Vec3::new(angle.cos(), 0.0, angle.sin()) * path.radius;
+        transform.translation = path.centre + offset;
+        // Face along the circle (the walker looks down +Z).
+        let heading = Vec3::new(-angle.sin(), 0.0, angle.cos()) * path.speed.signum();
+        transform.rotation = Quat::from_rotation_arc(Vec3::Z, heading);
+    }
+}
+
+fn controls(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut cameras: Query<&mut DynamicAo>,
+    mut show_spheres: ResMut<ShowOccluderSpheres>,
+) {
+    if keys.just_pressed(KeyCode::KeyS) {
+        show_spheres.0 = !show_spheres.0;
+    }
+    for mut ao in &mut cameras {
+        if keys.just_pressed(KeyCode::KeyN) {
+            ao.technique = match ao.technique {
+                AoTechnique::Off => AoTechnique::NearField,
+                _ => AoTechnique::Off,
+            };
+        }
+        if keys.just_pressed(KeyCode::KeyF) {
+            ao.spheres = !ao.spheres;
+        }
+        if keys.just_pressed(KeyCode::KeyD) {
+            ao.debug_view = !ao.debug_view;
+        }
+    }
+}
+
+fn show_settings(
+    cameras: Query<&DynamicAo>,
+    show_spheres: Res<ShowOccluderSpheres>,
+    occluders: Query<&OccluderSpheres>,
+    mut text: Query<&mut Text, With<HelpLine>>,
+) {
+    let (Ok(ao), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
+        return;
+    };
+    let on = |b: bool| if b { "on" } else { "off" };
+    let spheres: usize = occluders.iter().map(|o| o.spheres.len()).sum();
+    text.0 = format!(
+        "near field {} | far field {} ({spheres} spheres) | show spheres {} | debug view {}\n\
+         N near field  F far field  S show spheres  D debug view  Esc quit",
+        on(ao.technique != AoTechnique::Off),
+        on(ao.spheres),
+        on(show_spheres.0),
+        on(ao.debug_view),
+    );
+}
