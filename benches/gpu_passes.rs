@@ -1,8 +1,11 @@
 //! GPU time per pass, from timestamp queries, for no AO, Bevy's SSAO at each level and ours at
 //! each preset, on the same scene in the same run. Prints a Markdown table.
 //!
-//! `cargo bench --bench gpu_passes` (add `-- --width 1920 --height 1080` for another size and
-//! `-- --frames 60` for longer measurements).
+//! `cargo bench --bench gpu_passes` (add `-- --width 1920 --height 1080` for another size,
+//! `-- --frames 60` for longer measurements and `-- --only "Bevy SSAO High,spheres"` to run only
+//! the configurations whose names contain one of the comma-separated words).
+//! The `far field, N spheres` rows splat N occluder spheres (small balls with a
+//! `SphereOccluder` each, scattered over the view) with the image-space term off.
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
 
 #[path = "../examples/common/mod.rs"]
@@ -30,6 +33,8 @@ enum Config {
     NoAo,
     BevySsao(ScreenSpaceAmbientOcclusionQualityLevel),
     Preset(AoPreset),
+    /// The far field alone, from about this many spheres.
+    Spheres(u32),
 }
 
 impl Config {
@@ -38,6 +43,7 @@ impl Config {
             Config::NoAo => "no AO".into(),
             Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
             Config::Preset(preset) => format!("preset {}", preset.name()),
+            Config::Spheres(count) => format!("far field, {count} spheres"),
         }
     }
 }
@@ -69,7 +75,22 @@ fn main() {
         Config::Preset(AoPreset::Medium),
         Config::Preset(AoPreset::High),
         Config::Preset(AoPreset::Ultra),
+        Config::Spheres(1_000),
+        Config::Spheres(10_000),
+        Config::Spheres(100_000),
     ];
+    let only: Option<Vec<String>> = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|i| args.get(i + 1))
+        .map(|list| list.split(',').map(str::to_string).collect());
+    let configs: Vec<Config> = configs
+        .into_iter()
+        .filter(|c| {
+            only.as_ref()
+                .is_none_or(|words| words.iter().any(|w| c.name().contains(w.as_str())))
+        })
+        .collect();
 
     let mut adapter = String::new();
     let rows: Vec<Row> = configs
@@ -85,6 +106,7 @@ fn main() {
         ("dynamic_ao_ray_march", "ray march"),
         ("dynamic_ao_upsample", "upsample"),
         ("dynamic_ao_blur", "blur"),
+        ("dynamic_ao_spheres", "spheres"),
         ("dynamic_ao_compose", "compose"),
     ];
     println!(
@@ -164,9 +186,19 @@ fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
             passes.insert(name.to_string(), mean);
         }
     }
-    eprintln!("{}: {passes:?}", config.name());
+    let world = app.world_mut();
+    let spheres: usize = world
+        .query::<&OccluderSpheres>()
+        .iter(world)
+        .map(|o| o.spheres.len())
+        .sum();
+    let name = match config {
+        Config::Spheres(_) => format!("far field, {spheres} spheres"),
+        _ => config.name(),
+    };
+    eprintln!("{name}: {passes:?}");
     Row {
-        name: config.name(),
+        name,
         frame_ms,
         passes,
     }
@@ -199,6 +231,12 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
         Config::Preset(preset) => {
             camera.insert(DynamicAo::from_preset(*preset));
         }
+        Config::Spheres(_) => {
+            camera.insert(DynamicAo {
+                technique: AoTechnique::Off,
+                ..default()
+            });
+        }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();
     let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));
@@ -223,6 +261,29 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
             Transform::from_xyz(-2.0 + i as f32, 0.5, -0.9 + 0.3 * (i % 2) as f32),
         );
         spawn(&ball, Transform::from_xyz(-2.0 + i as f32, 0.5, 0.8));
+    }
+    if let Config::Spheres(count) = config {
+        // Small balls of 16 spheres each, scattered with a fixed hash over the visible room.
+        let pebble = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Sphere::new(0.08).mesh().ico(1).expect("a small icosphere"));
+        let hash = |i: u32| (i.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
+        for i in 0..count.div_ceil(16) {
+            let position = Vec3::new(
+                -3.5 + 7.0 * hash(3 * i),
+                0.08 + 1.6 * hash(3 * i + 1),
+                -1.4 + 3.4 * hash(3 * i + 2),
+            );
+            world.spawn((
+                Mesh3d(pebble.clone()),
+                MeshMaterial3d(material.clone()),
+                Transform::from_translation(position),
+                SphereOccluder {
+                    count: 16,
+                    ..default()
+                },
+            ));
+        }
     }
     world.spawn((
         DirectionalLight {

@@ -30,7 +30,7 @@ pub struct SphereOccluder {
     /// a mesh with fewer distinct vertices gets fewer. Default [`SphereOccluder::DEFAULT_COUNT`].
     pub count: u32,
     /// ε of eq. 5: the occlusion, as a fraction of ambient light, below which a sphere's
-    /// influence is cut off. It sets the reach d_far of each sphere (7 radii at 0.02); smaller
+    /// influence is cut off. It sets the reach d_far of each sphere (10 radii at 0.01); smaller
     /// is wider and costlier. Units: N/A. Range (0, 1). Default
     /// [`SphereOccluder::DEFAULT_EPSILON`].
     pub epsilon: f32,
@@ -40,7 +40,7 @@ impl SphereOccluder {
     /// Default sphere count per mesh.
     pub const DEFAULT_COUNT: u32 = 16;
     /// Default cut-off occlusion ε.
-    pub const DEFAULT_EPSILON: f32 = 0.02;
+    pub const DEFAULT_EPSILON: f32 = 0.01;
     /// Most spheres per mesh.
     pub const MAX_COUNT: u32 = 1024;
 
@@ -107,14 +107,14 @@ mod tests {
     fn defaults_match_the_docs() {
         let d = SphereOccluder::default();
         assert_eq!(d.count, 16);
-        assert_eq!(d.epsilon, 0.02);
+        assert_eq!(d.epsilon, 0.01);
         assert_eq!(d.sanitized(), d);
         let bad = SphereOccluder {
             count: 0,
             epsilon: f32::NAN,
         }
         .sanitized();
-        assert_eq!((bad.count, bad.epsilon), (1, 0.02));
+        assert_eq!((bad.count, bad.epsilon), (1, 0.01));
     }
 
     #[test]
@@ -128,6 +128,6 @@ mod tests {
                 sphere_occlusion(Vec3::new(0.0, reach * 1.1, 0.0), 0.3, Vec3::ZERO, Vec3::Y);
             assert!(beyond < epsilon);
         }
-        assert!((far_field_reach(1.0, 0.02) - 7.09).abs() < 0.01);
+        assert!((far_field_reach(1.0, 0.01) - 10.01).abs() < 0.01);
     }
 }

@@ -16,36 +16,12 @@ use bevy_dynamic_ao::reference::{
     scene::TriangleScene,
 };
 
+use crate::examples::example_binary;
 use crate::gltf_scene::{self, NodeKind};
 use crate::harness::GPU_TURN;
 
 fn binary() -> PathBuf {
-    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
-    BUILT
-        .get_or_init(|| {
-            // `cargo test` builds examples only as test harnesses, so build the real binary
-            // here, with the same cargo, profile and target folder as the tests themselves.
-            let exe = std::env::current_exe().expect("test binary path");
-            let profile = exe
-                .parent()
-                .and_then(Path::parent)
-                .expect("target/<profile>");
-            let mut args = vec!["build", "--example", "ao_capture"];
-            if profile.file_name().is_some_and(|name| name == "release") {
-                args.push("--release");
-            }
-            let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-            let status = Command::new(cargo)
-                .args(&args)
-                .current_dir(env!("CARGO_MANIFEST_DIR"))
-                .status()
-                .expect("cargo runs");
-            assert!(status.success(), "cargo {args:?} failed");
-            profile
-                .join("examples")
-                .join(format!("ao_capture{}", std::env::consts::EXE_SUFFIX))
-        })
-        .clone()
+    example_binary("ao_capture")
 }
 
 fn run(args: &[&str]) -> Output {
@@ -79,11 +55,27 @@ fn committed_scene_is_what_the_generator_writes() {
 }
 
 #[test]
+fn committed_walker_is_what_the_generator_writes() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/characters/walker.glb");
+    let committed = std::fs::read(path).expect("assets/characters/walker.glb");
+    assert!(
+        committed == crate::character::walker_glb(),
+        "assets/characters/walker.glb is stale: run `cargo run --example generate_assets`"
+    );
+}
+
+#[test]
 fn lists_its_techniques() {
     let out = run(&["--technique", "list"]);
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
-    for name in ["none", "near-field", "bevy-ssao"] {
+    for name in [
+        "none",
+        "near-field",
+        "bevy-ssao",
+        "spheres",
+        "near-field+spheres",
+    ] {
         assert!(
             text.lines().any(|l| l == name),
             "{name} missing from:\n{text}"
@@ -330,6 +322,113 @@ fn captures_the_generated_scene_close_to_ground_truth() {
     assert!(
         rmse(&ours, &truth, None) < rmse(&ours, &truth0, None),
         "the capture ignored --time"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `spheres` puts a `SphereOccluder` on every mesh of the scene: the far field alone darkens the
+/// floor around the cube and the pillar like ground truth does, and added to the near field it
+/// brings the capture closer to ground truth over a radius wider than the near field's.
+#[test]
+fn captures_the_far_field_of_the_generated_scene() {
+    let dir = temp_dir("capture_spheres");
+    let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
+    let capture = |technique: &str| {
+        let out_ao = dir.join(format!("{technique}.png"));
+        let out = run(&[
+            "--scene",
+            scene_path().to_str().unwrap(),
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--radius",
+            &radius.to_string(),
+            "--technique",
+            technique,
+            "--time",
+            &time.to_string(),
+            "--out-ao",
+            out_ao.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "ao_capture {technique} failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains(&format!("technique {technique} ")),
+            "{stdout}"
+        );
+        read_visibility_png(&out_ao)
+            .expect("a 16-bit grayscale PNG")
+            .2
+    };
+    let spheres = capture("spheres");
+    let near = capture("near-field");
+    let both = capture("near-field+spheres");
+    let (bvh, view) = generated_scene(time, w, h);
+    let truth = |radius: f32| {
+        ground_truth_visibility(
+            &bvh,
+            &view,
+            &GroundTruthSettings {
+                width: w,
+                height: h,
+                radius,
+                rays_per_pixel: 256,
+            },
+        )
+    };
+    let (truth_near, truth_wide) = (truth(radius), truth(2.0));
+    let report = |name: &str, v: &[f32]| {
+        let (a, b) = (rmse(v, &truth_near, None), rmse(v, &truth_wide, None));
+        println!(
+            "ao_capture {name}: RMSE {a:.4} vs ground truth R = {radius} m, {b:.4} vs R = 2 m"
+        );
+        (a, b)
+    };
+    let (_, spheres_wide) = report("spheres", &spheres);
+    let (_, near_wide) = report("near-field", &near);
+    let (_, both_wide) = report("near-field+spheres", &both);
+    // Beyond the near field's radius the floor still receives occlusion from the cube and the
+    // pillar (ground truth over 2 m); the near field shows none there, the far field does.
+    let beyond: Vec<usize> = (0..truth_wide.len())
+        .filter(|&i| {
+            let (origin, dir) = bevy_dynamic_ao::reference::ground_truth::camera_ray(
+                &view,
+                (i as u32) % w,
+                (i as u32) / w,
+                w,
+                h,
+            );
+            let on_floor = bvh
+                .closest_hit(origin, dir, 0.0, f32::INFINITY)
+                .is_some_and(|hit| (origin + dir * hit.t).y.abs() < 1e-3);
+            on_floor && near[i] > 0.995 && truth_wide[i] < 0.95
+        })
+        .collect();
+    assert!(beyond.len() > 200, "{} floor pixels beyond R", beyond.len());
+    let mean = |v: &[f32]| beyond.iter().map(|&i| 1.0 - v[i]).sum::<f32>() / beyond.len() as f32;
+    println!(
+        "floor beyond the near field's reach ({} pixels), mean occlusion: ground truth {:.3}, \
+         far field {:.3}, near field {:.3}",
+        beyond.len(),
+        mean(&truth_wide),
+        mean(&spheres),
+        mean(&near)
+    );
+    // Inscribed spheres fill only part of a box, and each is cut off at its reach d_far, so
+    // the far field finds a part of this occlusion, not all of it.
+    assert!(
+        mean(&spheres) > 0.1 * mean(&truth_wide) && mean(&spheres) > 5.0 * mean(&near),
+        "the far field misses occlusion beyond the near field's radius"
+    );
+    assert!(spheres_wide < rmse(&vec![1.0; spheres.len()], &truth_wide, None));
+    assert!(
+        both_wide < near_wide,
+        "adding the far field should bring the capture closer to wide ground truth"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

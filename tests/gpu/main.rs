@@ -2,6 +2,8 @@
 //! compare what the plugin computed with the CPU reference and with ray-traced ground truth.
 //! One test binary on purpose: every binary links all of Bevy.
 
+#[path = "../../examples/common/character.rs"]
+mod character;
 #[path = "../../examples/common/mod.rs"]
 mod common;
 #[path = "../../examples/common/gltf_scene.rs"]
@@ -11,6 +13,7 @@ mod ao_capture;
 mod back_layer;
 mod bad_input;
 mod cameras;
+mod examples;
 mod half_resolution;
 mod harness;
 mod horizon;

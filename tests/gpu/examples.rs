@@ -1,0 +1,93 @@
+//! Examples run as users run them: real processes, headless, writing a PNG.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::harness::GPU_TURN;
+
+/// The example binary `name`, built once per test run. `cargo test` builds examples only as test
+/// harnesses, so this builds the real binary with the same cargo, profile and target folder as
+/// the tests themselves.
+pub fn example_binary(name: &'static str) -> PathBuf {
+    static BUILT: std::sync::Mutex<Vec<(&str, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+    let mut built = BUILT.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some((_, path)) = built.iter().find(|(n, _)| *n == name) {
+        return path.clone();
+    }
+    let exe = std::env::current_exe().expect("test binary path");
+    let profile = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>");
+    let mut args = vec!["build", "--example", name];
+    if profile.file_name().is_some_and(|p| p == "release") {
+        args.push("--release");
+    }
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .args(&args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .status()
+        .expect("cargo runs");
+    assert!(status.success(), "cargo {args:?} failed");
+    let path = profile
+        .join("examples")
+        .join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    built.push((name, path.clone()));
+    path
+}
+
+#[test]
+fn deforming_characters_renders_headless() {
+    let binary = example_binary("deforming_characters");
+    let out = std::env::temp_dir().join(format!("dynamic_ao_walkers_{}.png", std::process::id()));
+    let run = |extra: &[&str]| {
+        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let mut args = vec![
+            "--headless",
+            "--frames",
+            "12",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        Command::new(&binary).args(&args).output().expect("runs")
+    };
+    let result = run(&["--debug-view", "--characters", "4"]);
+    assert!(
+        result.status.success(),
+        "deforming_characters failed:\n{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let image = image_luma(&out);
+    // The debug view shows visibility: open floor is white, the walkers' occlusion is not.
+    let dark = image.iter().filter(|v| **v < 200).count();
+    let white = image.iter().filter(|v| **v > 240).count();
+    println!("deforming_characters debug view: {dark} darker pixels, {white} white");
+    assert!(white > image.len() / 2, "the floor should be mostly open");
+    assert!(dark > 50, "the walkers should cast occlusion");
+
+    let bad = run(&["--characters", "lots"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--characters"));
+    std::fs::remove_file(&out).ok();
+}
+
+/// The mean of the colour channels of an 8-bit RGB(A) PNG, per pixel.
+fn image_luma(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).expect("the PNG exists"),
+    ));
+    let mut reader = decoder.read_info().expect("a PNG");
+    let mut data = vec![0; reader.output_buffer_size().expect("a size")];
+    let info = reader.next_frame(&mut data).expect("a frame");
+    let channels = info.color_type.samples();
+    data[..info.buffer_size()]
+        .chunks_exact(channels)
+        .map(|p| ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8)
+        .collect()
+}
