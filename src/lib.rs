@@ -52,7 +52,7 @@ use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
 pub use settings::{
-    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams,
+    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, HorizonMode, HorizonParams,
     NearFieldParams, RayMarchParams,
 };
 
@@ -61,8 +61,8 @@ pub mod prelude {
     pub use crate::DynamicAoPlugin;
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, HorizonMode, HorizonParams,
-        NearFieldParams, RayMarchParams,
+        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, HorizonMode,
+        HorizonParams, NearFieldParams, RayMarchParams,
     };
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;

@@ -54,6 +54,9 @@ pub struct DynamicAo {
     /// writes itself); with [`AoTechnique::Off`] the far field is the whole occlusion.
     /// Default: `true` (a scene without sphere occluders costs one cleared buffer).
     pub spheres: bool,
+    /// How the far field joins the image-space term. Default: [`FarFieldBlend::Add`], as
+    /// Shanmugam & Arikan §6 publish it.
+    pub far_field_blend: FarFieldBlend,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -71,6 +74,7 @@ impl Default for DynamicAo {
             blur: AoBlur::default(),
             half_resolution: false,
             spheres: true,
+            far_field_blend: FarFieldBlend::Add,
             debug_view: false,
         }
     }
@@ -240,6 +244,32 @@ impl AoPreset {
             AoPreset::Medium => "medium",
             AoPreset::High => "high",
             AoPreset::Ultra => "ultra",
+        }
+    }
+}
+
+/// How near-field (image-space) and far-field (sphere) occlusion combine.
+///
+/// Both terms see an occluder that is on screen and close by, so adding them counts it twice;
+/// the paper accepts that and relies on A_ψ = 1 inside the spheres. Taking the larger term never
+/// counts an occluder twice, but undercounts two different occluders on the same pixel. On the
+/// test scenes `Max` is closer to ground truth (see `BENCHMARKS.md`).
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[reflect(Default, Clone, Debug, PartialEq, Hash)]
+pub enum FarFieldBlend {
+    /// near + far, clamped to 1 (Shanmugam & Arikan 2007, §6).
+    #[default]
+    Add,
+    /// max(near, far).
+    Max,
+}
+
+impl FarFieldBlend {
+    /// The value the compose shader switches on.
+    pub(crate) fn shader_index(self) -> u32 {
+        match self {
+            FarFieldBlend::Add => 0,
+            FarFieldBlend::Max => 1,
         }
     }
 }

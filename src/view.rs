@@ -187,6 +187,8 @@ pub(crate) struct DynamicAoUniform {
     pub resolution_scale: u32,
     /// 1 when the far field of sphere occluders takes part.
     pub far_field: u32,
+    /// 0: near + far, 1: max(near, far) (see [`crate::FarFieldBlend`]).
+    pub far_field_blend: u32,
 }
 
 fn extract_views(
@@ -249,6 +251,7 @@ fn extract_views(
                 ray_steps: rays.steps,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 far_field: u32::from(far_field),
+                far_field_blend: ao.far_field_blend.shader_index(),
             },
         ));
     }

@@ -18,7 +18,8 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
 [--width W] [--height H] [--characters N] [--show-spheres] [--debug-view]
-keys: N near field on/off, F far field (spheres) on/off, S show spheres, D debug view, Esc quit";
+keys: N near field on/off, F far field (spheres) on/off, M add/max blend, S show spheres,
+      D debug view, Esc quit";
 
 const WALKER: &str = "characters/walker.glb";
 
@@ -215,6 +216,12 @@ fn controls(
         if keys.just_pressed(KeyCode::KeyF) {
             ao.spheres = !ao.spheres;
         }
+        if keys.just_pressed(KeyCode::KeyM) {
+            ao.far_field_blend = match ao.far_field_blend {
+                FarFieldBlend::Add => FarFieldBlend::Max,
+                FarFieldBlend::Max => FarFieldBlend::Add,
+            };
+        }
         if keys.just_pressed(KeyCode::KeyD) {
             ao.debug_view = !ao.debug_view;
         }
@@ -233,10 +240,11 @@ fn show_settings(
     let on = |b: bool| if b { "on" } else { "off" };
     let spheres: usize = occluders.iter().map(|o| o.spheres.len()).sum();
     text.0 = format!(
-        "near field {} | far field {} ({spheres} spheres) | show spheres {} | debug view {}\n\
-         N near field  F far field  S show spheres  D debug view  Esc quit",
+        "near field {} | far field {} ({spheres} spheres, {:?}) | show spheres {} | debug view {}\n\
+         N near field  F far field  M add/max blend  S show spheres  D debug view  Esc quit",
         on(ao.technique != AoTechnique::Off),
         on(ao.spheres),
+        ao.far_field_blend,
         on(show_spheres.0),
         on(ao.debug_view),
     );

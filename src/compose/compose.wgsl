@@ -1,5 +1,6 @@
-// Combined ambient occlusion (Shanmugam & Arikan 2007, §6): the terms add and clamp, and the
-// result is handed to Bevy's PBR lighting as visibility, 1 − occlusion.
+// Combined ambient occlusion (Shanmugam & Arikan 2007, §6): the terms add and clamp (or, on
+// request, the larger one wins), and the result is handed to Bevy's PBR lighting as visibility,
+// 1 − occlusion.
 
 #import bevy_dynamic_ao::settings::DynamicAoSettings
 
@@ -24,7 +25,12 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
         occlusion += textureLoad(near_occlusion, pixel, 0).r;
     }
     if settings.far_field != 0u {
-        occlusion += textureLoad(far_occlusion, pixel, 0).r;
+        let far = textureLoad(far_occlusion, pixel, 0).r;
+        if settings.far_field_blend == 1u {
+            occlusion = max(occlusion, far);
+        } else {
+            occlusion += far;
+        }
     }
     textureStore(visibility, pixel, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
 }

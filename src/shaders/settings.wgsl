@@ -31,4 +31,6 @@ struct DynamicAoSettings {
     resolution_scale: u32,
     // 1 when the far field of sphere occluders takes part.
     far_field: u32,
+    // 0: near + far, 1: max(near, far).
+    far_field_blend: u32,
 }

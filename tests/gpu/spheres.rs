@@ -5,6 +5,7 @@
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::PrimitiveTopology;
 use bevy::prelude::*;
+use bevy_dynamic_ao::FarFieldBlend;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{metrics::rmse, spheres::far_field_occlusion};
 
@@ -250,4 +251,54 @@ fn bad_occluder_meshes_warn_and_fall_back() {
         .filter(|(_, m)| **m)
         .all(|(v, _)| *v > 0.999);
     assert!(open, "with no occluder left, the far field is empty");
+}
+
+/// On scenes whose occluders are in view the near field already sees them, so the far field
+/// counts them a second time when the terms add (S&A §6). The test measures both blends against
+/// ground truth over the near field's radius and over a wider one: `Max` never counts an occluder
+/// twice, so it must stay close to the near field alone at its radius, and neither blend may lose
+/// accuracy over the wider radius, where the far field is what reaches.
+#[test]
+fn far_field_on_visible_occluders() {
+    for (name, scene) in crate::scenes::all() {
+        // Every mesh but the floor (the first) casts spheres.
+        let mut scene = scene;
+        scene.occluders = (1..scene.meshes.len())
+            .map(|i| (i, SphereOccluder::default()))
+            .collect();
+        let mut gpu = Gpu::new(&scene, DynamicAo::default());
+        gpu.set_ao(|ao| ao.spheres = false);
+        let near = gpu.frame(4);
+        gpu.set_ao(|ao| ao.spheres = true);
+        let added = gpu.frame(4);
+        gpu.set_ao(|ao| ao.far_field_blend = FarFieldBlend::Max);
+        let max = gpu.frame(4);
+        let bvh = scene.bvh();
+        let mask = near.geometry_mask();
+        let mut errors = Vec::new();
+        for radius in [0.73, 2.0] {
+            let truth = near.ground_truth(&bvh, radius);
+            let error = |v: &[f32]| rmse(v, &truth, Some(&mask));
+            let e = [
+                error(&near.visibility),
+                error(&added.visibility),
+                error(&max.visibility),
+            ];
+            println!(
+                "{name}, R = {radius} m: RMSE near field {:.4}, near + spheres (add) {:.4}, \
+                 (max) {:.4}",
+                e[0], e[1], e[2]
+            );
+            errors.push(e);
+        }
+        let [near_r, added_r, max_r] = errors[0];
+        let [near_wide, added_wide, max_wide] = errors[1];
+        assert!(max_r < near_r + 0.035, "{name}: max blend at R = 0.73 m");
+        assert!(
+            max_r <= added_r + 1e-4,
+            "{name}: max should not count more than add"
+        );
+        assert!(added_wide < near_wide + 1e-3, "{name}: add at R = 2 m");
+        assert!(max_wide < near_wide + 1e-3, "{name}: max at R = 2 m");
+    }
 }
