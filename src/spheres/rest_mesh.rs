@@ -96,14 +96,14 @@ impl RestMesh {
         };
         let skin = Self::skin(mesh, positions.len());
         let (morph_positions, morph_targets) = Self::morphs(mesh, positions.len());
-        Ok(Self::new(
+        Self::new(
             positions,
             normals,
             &indices,
             skin,
             morph_positions,
             morph_targets,
-        )?)
+        )
     }
 
     /// Builds the rest mesh from raw arrays. `normals`, when given, must match `positions`;
