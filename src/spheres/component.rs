@@ -10,7 +10,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// takes part, each with its own spheres. The rest pose of each mesh is clustered once (Lloyd,
 /// area-weighted) into `count` spheres, and every frame the spheres are refit from the skinned and
 /// morphed vertices, so they follow animation. Each sphere darkens every visible surface within
-/// its reach d_far (eq. 5), also when the mesh itself is off-screen or hidden.
+/// its reach d_far (eq. 5), also when the mesh itself is off-screen or behind other surfaces.
+/// A mesh whose `Visibility` hides it casts nothing.
 ///
 /// ```no_run
 /// # use bevy::prelude::*;

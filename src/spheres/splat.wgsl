@@ -24,6 +24,43 @@ struct VertexOutput {
     @location(0) @interpolate(flat) sphere: u32,
 }
 
+// The screen rectangle (NDC min.xy, max.xy) of the sphere of radius `reach` around the view-space
+// point `center`. Perspective: per axis, the two planes through the eye that contain the other
+// image axis and touch the sphere bound its image exactly; for the x axis, the plane
+// x = k·(−z) touches it where (c_x + k c_z)² = reach² (1 + k²), a quadratic in k whose roots are
+// the tangents of the silhouette. A sphere that reaches the eye's plane covers the whole screen;
+// one wholly behind it, nothing.
+fn reach_rectangle(center: vec3<f32>, reach: f32) -> vec4<f32> {
+    let p = view.clip_from_view;
+    if p[3][3] == 1.0 {
+        // Orthographic.
+        let ndc = (p * vec4<f32>(center, 1.0)).xy;
+        let extent = abs(vec2<f32>(p[0][0], p[1][1])) * reach;
+        return vec4<f32>(ndc - extent, ndc + extent);
+    }
+    let depth = -center.z;
+    if depth + reach <= 0.0 {
+        return vec4<f32>(2.0, 2.0, 2.0, 2.0);
+    }
+    let d2 = depth * depth - reach * reach;
+    if depth <= 0.0 || d2 <= 1e-4 * reach * reach {
+        return vec4<f32>(-1.0, -1.0, 1.0, 1.0);
+    }
+    var tangents: array<vec2<f32>, 2>;
+    for (var axis = 0; axis < 2; axis += 1) {
+        let c = center[axis];
+        // Roots of k²(c_z² − R²) + 2k c c_z + c² − R² = 0, with c_z = −depth.
+        let root = reach * sqrt(c * c + d2);
+        tangents[axis] = vec2<f32>(c * depth - root, c * depth + root) / d2;
+    }
+    // ndc = P00·(x / −z) + P20·(z / −z), and likewise for y.
+    let scale = vec2<f32>(p[0][0], p[1][1]);
+    let shift = -vec2<f32>(p[2][0], p[2][1]);
+    let a = scale * vec2<f32>(tangents[0].x, tangents[1].x) + shift;
+    let b = scale * vec2<f32>(tangents[0].y, tangents[1].y) + shift;
+    return vec4<f32>(min(a, b), max(a, b));
+}
+
 @vertex
 fn vertex(
     @builtin(vertex_index) vertex_index: u32,
@@ -33,34 +70,9 @@ fn vertex(
     let reach = sphere.reach.x;
     let center = (view.view_from_world * vec4<f32>(sphere.center_radius.xyz, 1.0)).xyz;
 
-    // The screen rectangle of the reach sphere, from the corners of its view-space bounding
-    // cube: conservative, and exact enough that the fragment's distance test does the rest.
-    var lo = vec2<f32>(1e30);
-    var hi = vec2<f32>(-1e30);
-    var in_front = 0u;
-    for (var k = 0u; k < 8u; k += 1u) {
-        let sign = vec3<f32>(
-            select(-1.0, 1.0, (k & 1u) != 0u),
-            select(-1.0, 1.0, (k & 2u) != 0u),
-            select(-1.0, 1.0, (k & 4u) != 0u),
-        );
-        let clip = view.clip_from_view * vec4<f32>(center + reach * sign, 1.0);
-        if clip.w > 1e-6 {
-            in_front += 1u;
-            let ndc = clip.xy / clip.w;
-            lo = min(lo, ndc);
-            hi = max(hi, ndc);
-        }
-    }
-    if in_front < 8u {
-        // Part of the cube is behind the eye: its projection is unbounded.
-        lo = vec2<f32>(-1.0);
-        hi = vec2<f32>(1.0);
-    }
-    if in_front == 0u {
-        // Wholly behind the eye: no visible point is within reach.
-        hi = lo;
-    }
+    let bounds = reach_rectangle(center, reach);
+    var lo = bounds.xy;
+    var hi = bounds.zw;
     lo = clamp(lo, vec2<f32>(-1.0), vec2<f32>(1.0));
     hi = clamp(hi, vec2<f32>(-1.0), vec2<f32>(1.0));
 
