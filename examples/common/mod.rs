@@ -97,6 +97,7 @@ pub fn parse_number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
 /// first frames are deterministic. The app is driven by `app.update()` or a zero-delay loop.
 pub fn headless_plugins() -> impl PluginGroup {
     DefaultPlugins
+        .set(asset_plugin())
         .set(WindowPlugin {
             primary_window: None,
             exit_condition: ExitCondition::DontExit,
@@ -108,6 +109,15 @@ pub fn headless_plugins() -> impl PluginGroup {
             ..default()
         })
         .disable::<WinitPlugin>()
+}
+
+/// The crate's `assets/` folder, wherever the example binary is started from (Bevy's default is
+/// relative to the executable unless `cargo run` sets `CARGO_MANIFEST_DIR`).
+fn asset_plugin() -> AssetPlugin {
+    AssetPlugin {
+        file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+        ..default()
+    }
 }
 
 /// The app of an example: a window titled `title`, or headless when `--headless` was given.
@@ -127,7 +137,7 @@ pub fn example_app(title: &str, args: &ExampleArgs) -> App {
         })
         .add_systems(Update, headless_capture);
     } else {
-        app.add_plugins(DefaultPlugins.set(WindowPlugin {
+        app.add_plugins(DefaultPlugins.set(asset_plugin()).set(WindowPlugin {
             primary_window: Some(Window {
                 title: title.into(),
                 ..default()

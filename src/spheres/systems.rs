@@ -203,8 +203,9 @@ pub(crate) fn refit_spheres(
             if let Some(skinned) = skinned {
                 if fitted.mesh.skin.is_none() {
                     warn_once(Problem::SkinWithoutJointData, &|| {
-                        "has a SkinnedMesh but no joint index/weight attributes; its spheres \
-                         follow its transform"
+                        "has a SkinnedMesh but no joint index/weight attributes (Bevy's renderer \
+                         rejects such a mesh while it is visible); its spheres follow its \
+                         transform"
                             .to_string()
                     });
                 } else if let Some(bindposes) = inverse_bindposes.get(&skinned.inverse_bindposes) {

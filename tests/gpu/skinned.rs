@@ -270,3 +270,90 @@ fn occluder_spheres_follow_the_skin() {
         "{upper} upper, {lower} lower spheres"
     );
 }
+
+/// A `SkinnedMesh` on a mesh without joint attributes, and a skin with a NaN joint: a warning
+/// each, spheres that follow the transform or leave out what is not finite, and no panic.
+///
+/// Bevy 0.19.1's own prepass and main pass reject a *visible* `SkinnedMesh` whose mesh has no
+/// joint attributes (a bind group layout mismatch that stops the app), so that mesh stands out of
+/// view here; its spheres are still computed, as for any off-screen occluder.
+#[test]
+fn bad_skins_fall_back() {
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let world = gpu.app.world_mut();
+    let bindposes = world
+        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
+        .add(vec![
+            Mat4::IDENTITY,
+            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
+        ]);
+    let mut unskinned = column();
+    unskinned.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
+    unskinned.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
+    let unskinned = world.resource_mut::<Assets<Mesh>>().add(unskinned);
+    let skinned = world.resource_mut::<Assets<Mesh>>().add(column());
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    let root = world.spawn(Transform::IDENTITY).id();
+    let mut broken = Transform::from_xyz(0.0, LENGTH / 2.0, 0.0);
+    broken.translation.y = f32::NAN;
+    let elbow = world.spawn((broken, ChildOf(root))).id();
+    let occluder = SphereOccluder {
+        count: 6,
+        ..default()
+    };
+    let without_skin_data = world
+        .spawn((
+            Mesh3d(unskinned),
+            MeshMaterial3d(material.clone()),
+            SkinnedMesh {
+                inverse_bindposes: bindposes.clone(),
+                joints: vec![root, elbow],
+            },
+            occluder,
+            Transform::from_xyz(30.0, 0.0, 0.0),
+        ))
+        .id();
+    let nan_joint = world
+        .spawn((
+            Mesh3d(skinned),
+            MeshMaterial3d(material),
+            SkinnedMesh {
+                inverse_bindposes: bindposes,
+                joints: vec![root, elbow],
+            },
+            occluder,
+            Transform::IDENTITY,
+        ))
+        .id();
+    let frame = gpu.frame(4);
+    let world = gpu.app.world();
+    let spheres = |entity| {
+        world
+            .get::<OccluderSpheres>(entity)
+            .expect("the plugin adds OccluderSpheres")
+            .spheres
+            .clone()
+    };
+    let plain = spheres(without_skin_data);
+    let partial = spheres(nan_joint);
+    println!(
+        "NaN joint: {} of 6 spheres kept; no skin data: {} spheres",
+        partial.len(),
+        plain.len()
+    );
+    assert_eq!(
+        plain.len(),
+        6,
+        "without skin data the spheres follow the transform"
+    );
+    assert!(plain.iter().all(|s| (s.center.x - 30.0).abs() < HALF));
+    assert!(partial.len() < 6 && !partial.is_empty());
+    assert!(
+        partial
+            .iter()
+            .all(|s| s.center.is_finite() && s.radius.is_finite())
+    );
+    assert!(frame.visibility.iter().all(|v| v.is_finite()));
+}

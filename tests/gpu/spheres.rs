@@ -337,3 +337,47 @@ fn far_field_on_visible_occluders() {
         assert!(max_wide < near_wide + 1e-3, "{name}: max at R = 2 m");
     }
 }
+
+/// A mesh over `ASYNC_CLUSTERING_VERTICES` is clustered on the async compute pool: the frame that
+/// meets it renders without its spheres instead of waiting, and they arrive a few frames later.
+#[test]
+fn large_meshes_are_clustered_without_stalling_a_frame() {
+    let ball = Sphere::new(0.5).mesh().uv(64, 40);
+    assert!(
+        ball.count_vertices() > bevy_dynamic_ao::spheres::ASYNC_CLUSTERING_VERTICES,
+        "the test mesh must take the async path"
+    );
+    let mut gpu = Gpu::new(
+        &SceneSpec::new(Transform::from_xyz(0.0, 2.0, 4.0).looking_at(Vec3::ZERO, Vec3::Y)),
+        far_field_only(),
+    );
+    let mesh = gpu.app.world_mut().resource_mut::<Assets<Mesh>>().add(ball);
+    let entity = gpu
+        .app
+        .world_mut()
+        .spawn((
+            Mesh3d(mesh),
+            Transform::from_xyz(0.0, 0.5, 0.0),
+            SphereOccluder::default(),
+        ))
+        .id();
+    gpu.update(1);
+    let count = |gpu: &Gpu| {
+        gpu.app
+            .world()
+            .get::<OccluderSpheres>(entity)
+            .map_or(0, |s| s.spheres.len())
+    };
+    assert_eq!(
+        count(&gpu),
+        0,
+        "the first frame must not wait for the clustering"
+    );
+    let mut frames = 1;
+    while count(&gpu) == 0 && frames < 300 {
+        gpu.update(1);
+        frames += 1;
+    }
+    println!("spheres of a large mesh arrived after {frames} frames");
+    assert_eq!(count(&gpu), 16);
+}
