@@ -278,7 +278,8 @@ impl FarFieldBlend {
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[reflect(Default, Clone, Debug, PartialEq, Hash)]
 pub enum AoTechnique {
-    /// No occlusion: visibility is 1 everywhere.
+    /// No image-space occlusion; the far field of sphere occluders still applies when
+    /// [`DynamicAo::spheres`] is on (with it off, visibility is 1 everywhere).
     Off,
     /// Image-space near-field AO from the two-layer ND-buffer (Shanmugam & Arikan 2007, §4).
     #[default]
