@@ -35,6 +35,7 @@
 #![warn(missing_docs)]
 
 pub mod compose;
+pub mod fields;
 pub mod filter;
 pub mod horizon;
 mod image_space;
@@ -92,6 +93,7 @@ impl Plugin for DynamicAoPlugin {
                 horizon::HorizonPlugin,
                 ray_march::RayMarchPlugin,
                 spheres::SphereOccluderPlugin,
+                fields::AoFieldPlugin,
                 image_space::ImageSpacePlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,

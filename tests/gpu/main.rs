@@ -14,6 +14,7 @@ mod back_layer;
 mod bad_input;
 mod cameras;
 mod examples;
+mod fields;
 mod half_resolution;
 mod harness;
 mod horizon;

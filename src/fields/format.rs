@@ -1,0 +1,277 @@
+//! The `.aofield` file: one baked ambient occlusion field, versioned and checksummed.
+//!
+//! Layout, little-endian:
+//!
+//! | bytes | content |
+//! |---|---|
+//! | 8 | magic `AOFIELD\0` |
+//! | 4 | version (u32, currently 1) |
+//! | 12 | grid resolution x, y, z (u32 each, 2 to [`MAX_RESOLUTION`]) |
+//! | 12 | grid box centre, mesh space (f32 × 3, metres) |
+//! | 12 | grid box half extents e_i (f32 × 3, metres, > 0) |
+//! | 16 per cell | occlusion a ∈ [0, 1], then the average occluded direction (f32 × 4), x fastest, then y, then z |
+//! | 8 | FNV-1a 64-bit hash of every byte before it |
+
+use bevy::asset::Asset;
+use bevy::math::{UVec3, Vec3};
+use bevy::reflect::TypePath;
+
+/// First bytes of every `.aofield` file.
+pub const MAGIC: &[u8; 8] = b"AOFIELD\0";
+/// The version this crate writes and reads.
+pub const VERSION: u32 = 1;
+/// Largest grid resolution per axis.
+pub const MAX_RESOLUTION: u32 = 256;
+const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12;
+const CHECKSUM_BYTES: usize = 8;
+
+/// A baked ambient occlusion field (Malmer et al. 2005): per grid cell, the fraction of the
+/// sphere of directions the object blocks and the average occluded direction, on a regular grid
+/// over a box around the object, in the object's own (mesh) space.
+#[derive(Asset, TypePath, Clone, Debug, PartialEq)]
+pub struct AoFieldData {
+    /// Cells per axis.
+    pub resolution: UVec3,
+    /// Centre of the grid box, mesh space, metres.
+    pub center: Vec3,
+    /// Half extents of the grid box, metres (e_i of eq. 4).
+    pub half_extent: Vec3,
+    /// Per cell, x fastest: occlusion a ∈ [0, 1] (eq. 2) and the average occluded direction
+    /// (unit, or zero where nothing is occluded).
+    pub cells: Vec<[f32; 4]>,
+}
+
+/// Why bytes are not a valid `.aofield` file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AoFieldError {
+    /// Fewer bytes than the header and checksum need.
+    TooShort(usize),
+    /// The file does not start with `AOFIELD\0`.
+    BadMagic,
+    /// A version this crate cannot read.
+    UnsupportedVersion(u32),
+    /// A resolution outside 2..=[`MAX_RESOLUTION`].
+    BadResolution(UVec3),
+    /// A centre or half extent that is not finite, or a half extent that is not positive.
+    BadBox,
+    /// The file is shorter or longer than its resolution says.
+    WrongLength {
+        /// Bytes the header promises.
+        expected: usize,
+        /// Bytes found.
+        found: usize,
+    },
+    /// The stored checksum does not match the content: the file is corrupt.
+    ChecksumMismatch,
+    /// A cell holds a non-finite value or an occlusion outside [0, 1].
+    BadCell(usize),
+    /// Reading the file failed.
+    Io(String),
+}
+
+impl std::fmt::Display for AoFieldError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::TooShort(n) => write!(f, "not an AO field: only {n} bytes"),
+            Self::BadMagic => write!(f, "not an AO field: the file does not start with AOFIELD"),
+            Self::UnsupportedVersion(v) => write!(
+                f,
+                "AO field version {v} is not supported (this build reads version {VERSION}); \
+                 bake it again"
+            ),
+            Self::BadResolution(r) => write!(
+                f,
+                "AO field resolution {r} is outside 2..={MAX_RESOLUTION} per axis"
+            ),
+            Self::BadBox => write!(f, "AO field box is not finite or has no extent"),
+            Self::WrongLength { expected, found } => write!(
+                f,
+                "AO field is truncated or padded: {found} bytes where its header promises \
+                 {expected}"
+            ),
+            Self::ChecksumMismatch => write!(f, "AO field is corrupt: its checksum does not match"),
+            Self::BadCell(i) => write!(f, "AO field cell {i} holds an invalid value"),
+            Self::Io(e) => write!(f, "AO field could not be read: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for AoFieldError {}
+
+impl From<std::io::Error> for AoFieldError {
+    fn from(error: std::io::Error) -> Self {
+        Self::Io(error.to_string())
+    }
+}
+
+/// FNV-1a, 64 bits: small, dependency-free and good enough to catch corruption.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, b| {
+        (hash ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+impl AoFieldData {
+    /// Number of cells the resolution calls for.
+    pub fn cell_count(&self) -> usize {
+        (self.resolution.x * self.resolution.y * self.resolution.z) as usize
+    }
+
+    /// Index of cell (x, y, z).
+    pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
+        ((z * self.resolution.y + y) * self.resolution.x + x) as usize
+    }
+
+    /// The file bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(HEADER_BYTES + 16 * self.cells.len() + CHECKSUM_BYTES);
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&VERSION.to_le_bytes());
+        for v in self.resolution.to_array() {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in self
+            .center
+            .to_array()
+            .into_iter()
+            .chain(self.half_extent.to_array())
+        {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        for cell in &self.cells {
+            for v in cell {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let checksum = fnv1a(&bytes);
+        bytes.extend_from_slice(&checksum.to_le_bytes());
+        bytes
+    }
+
+    /// Reads file bytes, checking everything the header promises.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, AoFieldError> {
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES {
+            return Err(AoFieldError::TooShort(bytes.len()));
+        }
+        if &bytes[..8] != MAGIC {
+            return Err(AoFieldError::BadMagic);
+        }
+        let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        let f32_at = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(AoFieldError::UnsupportedVersion(version));
+        }
+        let resolution = UVec3::new(u32_at(12), u32_at(16), u32_at(20));
+        if resolution.min_element() < 2 || resolution.max_element() > MAX_RESOLUTION {
+            return Err(AoFieldError::BadResolution(resolution));
+        }
+        let center = Vec3::new(f32_at(24), f32_at(28), f32_at(32));
+        let half_extent = Vec3::new(f32_at(36), f32_at(40), f32_at(44));
+        if !center.is_finite() || !half_extent.is_finite() || half_extent.min_element() <= 0.0 {
+            return Err(AoFieldError::BadBox);
+        }
+        let cells = (resolution.x * resolution.y * resolution.z) as usize;
+        let expected = HEADER_BYTES + 16 * cells + CHECKSUM_BYTES;
+        if bytes.len() != expected {
+            return Err(AoFieldError::WrongLength {
+                expected,
+                found: bytes.len(),
+            });
+        }
+        let body = &bytes[..expected - CHECKSUM_BYTES];
+        let stored = u64::from_le_bytes(bytes[expected - CHECKSUM_BYTES..].try_into().unwrap());
+        if fnv1a(body) != stored {
+            return Err(AoFieldError::ChecksumMismatch);
+        }
+        let cells = (0..cells)
+            .map(|i| {
+                let at = HEADER_BYTES + 16 * i;
+                let cell = [f32_at(at), f32_at(at + 4), f32_at(at + 8), f32_at(at + 12)];
+                let valid = cell.iter().all(|v| v.is_finite()) && (0.0..=1.0).contains(&cell[0]);
+                valid.then_some(cell).ok_or(AoFieldError::BadCell(i))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            resolution,
+            center,
+            half_extent,
+            cells,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field() -> AoFieldData {
+        let resolution = UVec3::new(3, 2, 4);
+        let cells = (0..24).map(|i| [i as f32 / 24.0, 0.0, 1.0, 0.0]).collect();
+        AoFieldData {
+            resolution,
+            center: Vec3::new(0.5, 1.0, -2.0),
+            half_extent: Vec3::new(1.0, 2.0, 3.0),
+            cells,
+        }
+    }
+
+    #[test]
+    fn round_trip() {
+        let f = field();
+        assert_eq!(AoFieldData::from_bytes(&f.to_bytes()), Ok(f));
+    }
+
+    #[test]
+    fn bad_files_give_clear_errors() {
+        let good = field().to_bytes();
+        assert_eq!(
+            AoFieldData::from_bytes(&good[..20]),
+            Err(AoFieldError::TooShort(20))
+        );
+        let mut magic = good.clone();
+        magic[0] = b'X';
+        assert_eq!(AoFieldData::from_bytes(&magic), Err(AoFieldError::BadMagic));
+        let mut version = good.clone();
+        version[8] = 7;
+        assert_eq!(
+            AoFieldData::from_bytes(&version),
+            Err(AoFieldError::UnsupportedVersion(7))
+        );
+        let truncated = &good[..good.len() - 17];
+        assert!(matches!(
+            AoFieldData::from_bytes(truncated),
+            Err(AoFieldError::WrongLength { .. })
+        ));
+        let mut corrupt = good.clone();
+        corrupt[HEADER_BYTES + 5] ^= 0x40;
+        assert_eq!(
+            AoFieldData::from_bytes(&corrupt),
+            Err(AoFieldError::ChecksumMismatch)
+        );
+        let mut huge = field();
+        huge.resolution = UVec3::new(1, 2, 2);
+        huge.cells.truncate(4);
+        assert!(matches!(
+            AoFieldData::from_bytes(&huge.to_bytes()),
+            Err(AoFieldError::BadResolution(_))
+        ));
+        let mut nan = field();
+        nan.cells[3][0] = f32::NAN;
+        assert_eq!(
+            AoFieldData::from_bytes(&nan.to_bytes()),
+            Err(AoFieldError::BadCell(3))
+        );
+        // Every message names the problem in words.
+        for error in [
+            AoFieldError::BadMagic,
+            AoFieldError::UnsupportedVersion(7),
+            AoFieldError::ChecksumMismatch,
+        ] {
+            assert!(
+                error.to_string().starts_with("not an AO field")
+                    || error.to_string().starts_with("AO field")
+            );
+        }
+    }
+}
