@@ -53,17 +53,18 @@ use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
 pub use settings::{
-    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, HorizonMode, HorizonParams,
-    NearFieldParams, RayMarchParams,
+    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
+    HorizonParams, NearFieldParams, RayMarchParams,
 };
 
 /// Everything a user of the crate usually needs.
 pub mod prelude {
     pub use crate::DynamicAoPlugin;
+    pub use crate::fields::{AoField, AoFieldData};
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, HorizonMode,
-        HorizonParams, NearFieldParams, RayMarchParams,
+        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, FieldShading,
+        HorizonMode, HorizonParams, NearFieldParams, RayMarchParams,
     };
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;

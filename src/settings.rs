@@ -57,6 +57,12 @@ pub struct DynamicAo {
     /// How the far field joins the image-space term. Default: [`FarFieldBlend::Add`], as
     /// Shanmugam & Arikan §6 publish it.
     pub far_field_blend: FarFieldBlend,
+    /// Add the occlusion of every [`AoField`](crate::fields::AoField) occluder (Malmer et al.
+    /// 2005), also from occluders that are off-screen or hidden; it joins the far field. Not with
+    /// [`AoTechnique::BevySsao`]. Default: `true`.
+    pub fields: bool,
+    /// How AO fields shade a receiver. Default: [`FieldShading::Cone`].
+    pub field_shading: FieldShading,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -75,6 +81,8 @@ impl Default for DynamicAo {
             half_resolution: false,
             spheres: true,
             far_field_blend: FarFieldBlend::Add,
+            fields: true,
+            field_shading: FieldShading::Cone,
             debug_view: false,
         }
     }
@@ -246,6 +254,20 @@ impl AoPreset {
             AoPreset::Ultra => "ultra",
         }
     }
+}
+
+/// How an AO field turns its stored occlusion into the share of a receiver's ambient light it
+/// blocks (Malmer et al. 2005).
+#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[reflect(Default, Clone, Debug, PartialEq, Hash)]
+pub enum FieldShading {
+    /// The cone of occluded directions clipped by the receiver's tangent plane, with the
+    /// diffuse cosine: T_clip(a, cos β) (§3.3.1). Also right on the object's own surface.
+    #[default]
+    Cone,
+    /// Twice the blocked share of the sphere, 2a (§3.2): cheaper, ignores the receiver's
+    /// normal, and darkens the object's own surface.
+    OcclusionOnly,
 }
 
 /// How near-field (image-space) and far-field (sphere) occlusion combine.

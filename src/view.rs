@@ -146,6 +146,9 @@ pub(crate) struct DynamicAoView {
     pub half_resolution: bool,
     /// The far field of sphere occluders takes part.
     pub far_field: bool,
+    /// AO field occluders take part.
+    pub fields: bool,
+    pub field_shading: crate::settings::FieldShading,
     pub debug_view: bool,
 }
 
@@ -189,6 +192,8 @@ pub(crate) struct DynamicAoUniform {
     pub far_field: u32,
     /// 0: near + far, 1: max(near, far) (see [`crate::FarFieldBlend`]).
     pub far_field_blend: u32,
+    /// 1 when AO field occluders take part.
+    pub fields: u32,
 }
 
 fn extract_views(
@@ -221,6 +226,7 @@ fn extract_views(
         let rays = ao.ray_march.sanitized();
         // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
         let far_field = ao.spheres && ao.technique != AoTechnique::BevySsao;
+        let fields = ao.fields && ao.technique != AoTechnique::BevySsao;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
@@ -229,6 +235,8 @@ fn extract_views(
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
                 far_field,
+                fields,
+                field_shading: ao.field_shading,
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -252,6 +260,7 @@ fn extract_views(
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 far_field: u32::from(far_field),
                 far_field_blend: ao.far_field_blend.shader_index(),
+                fields: u32::from(fields),
             },
         ));
     }
@@ -271,6 +280,8 @@ pub(crate) struct DynamicAoTextures {
     pub blur_scratch: CachedTexture,
     /// Summed far-field occlusion of the sphere occluders, full size.
     pub far_occlusion: CachedTexture,
+    /// Product of the AO field occluders' visibilities, full size.
+    pub field_visibility: CachedTexture,
 }
 
 fn prepare_view_textures(
@@ -328,6 +339,12 @@ fn prepare_view_textures(
             blur_scratch: texture("dynamic_ao_blur_scratch", full, OCCLUSION_FORMAT, storage),
             far_occlusion: texture(
                 "dynamic_ao_far_occlusion",
+                full,
+                FAR_OCCLUSION_FORMAT,
+                attachment,
+            ),
+            field_visibility: texture(
+                "dynamic_ao_field_visibility",
                 full,
                 FAR_OCCLUSION_FORMAT,
                 attachment,

@@ -7,10 +7,11 @@
 @group(0) @binding(0) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
 @group(0) @binding(2) var far_occlusion: texture_2d<f32>;
+@group(0) @binding(3) var field_visibility: texture_2d<f32>;
 #ifdef VISIBILITY_R16FLOAT
-@group(0) @binding(3) var visibility: texture_storage_2d<r16float, write>;
+@group(0) @binding(4) var visibility: texture_storage_2d<r16float, write>;
 #else
-@group(0) @binding(3) var visibility: texture_storage_2d<r32float, write>;
+@group(0) @binding(4) var visibility: texture_storage_2d<r32float, write>;
 #endif
 
 @compute @workgroup_size(8, 8, 1)
@@ -24,8 +25,16 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     if settings.near_field != 0u {
         occlusion += textureLoad(near_occlusion, pixel, 0).r;
     }
+    // The far terms: sphere occlusion adds (S&A §6); AO fields arrive as the product of their
+    // occluders' visibilities (Malmer et al. §3.3.2) and join as one more far occluder.
+    var far = 0.0;
     if settings.far_field != 0u {
-        let far = textureLoad(far_occlusion, pixel, 0).r;
+        far += textureLoad(far_occlusion, pixel, 0).r;
+    }
+    if settings.fields != 0u {
+        far += 1.0 - textureLoad(field_visibility, pixel, 0).r;
+    }
+    if settings.far_field != 0u || settings.fields != 0u {
         if settings.far_field_blend == 1u {
             occlusion = max(occlusion, far);
         } else {

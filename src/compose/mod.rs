@@ -23,10 +23,11 @@ use bevy::render::{
     render_resource::{PipelineCache, SpecializedRenderPipelines},
 };
 
+use crate::fields::FieldPipelines;
 use crate::filter::BlurPipelines;
 use crate::image_space::ImageSpacePipelines;
 use crate::schedule::DynamicAoSystems;
-use crate::settings::AoTechnique;
+use crate::settings::{AoTechnique, FieldShading};
 use crate::spheres::SplatPipeline;
 use crate::view::DynamicAoView;
 
@@ -88,6 +89,7 @@ fn hand_over_from_bevy_ssao(
     blur: Res<BlurPipelines>,
     compose: Res<pipeline::ComposePipeline>,
     splat: Res<SplatPipeline>,
+    fields: Res<FieldPipelines>,
     views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
 ) {
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
@@ -101,7 +103,13 @@ fn hand_over_from_bevy_ssao(
             && (!view.half_resolution || ready(blur.upsample));
         let far_field =
             !view.far_field || pipeline_cache.get_render_pipeline(splat.pipeline).is_some();
-        if technique && filter && far_field && ready(compose.pipeline) {
+        let field_pipeline = match view.field_shading {
+            FieldShading::Cone => fields.cone,
+            FieldShading::OcclusionOnly => fields.occlusion_only,
+        };
+        let fields_ready =
+            !view.fields || pipeline_cache.get_render_pipeline(field_pipeline).is_some();
+        if technique && filter && far_field && fields_ready && ready(compose.pipeline) {
             commands.entity(entity).insert(AoPassesReady);
             if bevy_ssao {
                 commands.entity(entity).remove::<SsaoPipelineId>();

@@ -45,6 +45,7 @@ impl FromWorld for ComposePipeline {
                     uniform_buffer::<DynamicAoUniform>(true),
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_storage_2d(format, StorageTextureAccess::WriteOnly),
                 ),
             ),
@@ -96,6 +97,7 @@ pub(crate) fn prepare_compose_bind_groups(
                 settings_binding.clone(),
                 &textures.full_occlusion.default_view,
                 &textures.far_occlusion.default_view,
+                &textures.field_visibility.default_view,
                 &ssao.screen_space_ambient_occlusion_texture.default_view,
             )),
         );

@@ -5,6 +5,7 @@
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
 //! - [`horizon`]: horizon-based AO (Bavoil & Sainz 2008) exactly as `horizon.wgsl` runs it.
 //! - [`ray_march`]: the ray-marched reference exactly as `ray_march.wgsl` runs it.
+//! - [`fields`]: AO field occlusion exactly as `fields/fields.wgsl` evaluates it.
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
 //! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
@@ -14,6 +15,7 @@
 //! - [`png16`]: 16-bit grayscale PNG files of visibility.
 
 pub mod bvh;
+pub mod fields;
 pub mod filter;
 pub mod ground_truth;
 pub mod horizon;

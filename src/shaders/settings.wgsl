@@ -33,4 +33,6 @@ struct DynamicAoSettings {
     far_field: u32,
     // 0: near + far, 1: max(near, far).
     far_field_blend: u32,
+    // 1 when AO field occluders take part.
+    fields: u32,
 }

@@ -37,6 +37,8 @@ pub struct SceneSpec {
     pub sun: Option<(Transform, f32)>,
     /// Meshes (by index into `meshes`) that carry a sphere occluder.
     pub occluders: Vec<(usize, SphereOccluder)>,
+    /// Meshes (by index into `meshes`) that carry an AO field.
+    pub fields: Vec<(usize, AoField)>,
 }
 
 impl SceneSpec {
@@ -47,6 +49,7 @@ impl SceneSpec {
             ambient: 500.0,
             sun: None,
             occluders: Vec::new(),
+            fields: Vec::new(),
         }
     }
 
@@ -184,6 +187,9 @@ impl Gpu {
                 world.spawn((Mesh3d(mesh), MeshMaterial3d(material.clone()), *transform));
             if let Some((_, occluder)) = scene.occluders.iter().find(|(k, _)| *k == i) {
                 entity.insert(*occluder);
+            }
+            if let Some((_, field)) = scene.fields.iter().find(|(k, _)| *k == i) {
+                entity.insert(field.clone());
             }
         }
         if let Some((transform, illuminance)) = scene.sun {

@@ -1,0 +1,293 @@
+//! Render-world side of the AO fields: every field asset in one storage buffer, one instance per
+//! occluder, the T_clip table, the box pipeline and the per-view bind groups.
+
+use bevy::asset::{AssetId, Assets, load_embedded_asset};
+use bevy::camera::visibility::InheritedVisibility;
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::math::{Affine3A, Mat4, Vec3, Vec4};
+use bevy::prelude::GlobalTransform;
+use bevy::render::{
+    Extract,
+    render_resource::{
+        binding_types::{
+            storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
+        },
+        *,
+    },
+    renderer::{RenderDevice, RenderQueue},
+    view::{ViewUniform, ViewUniforms},
+};
+use bevy::utils::default;
+use bytemuck::{Pod, Zeroable};
+
+use super::format::AoFieldData;
+use super::systems::ResolvedAoField;
+use super::t_clip::t_clip_table;
+use crate::view::{DynamicAoView, FAR_OCCLUSION_FORMAT};
+
+/// One occluder as `fields.wgsl` reads it.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct FieldInstance {
+    world_from_box: Mat4,
+    grid_from_world: Mat4,
+    world_from_mesh: [Vec4; 3],
+    resolution: [u32; 3],
+    offset: u32,
+}
+
+impl FieldInstance {
+    /// The instance of `field` placed by `world_from_mesh`; `None` for a transform that cannot be
+    /// inverted (zero scale, NaN).
+    pub fn new(field: &AoFieldData, world_from_mesh: Affine3A, offset: u32) -> Option<Self> {
+        let mesh_from_box = Affine3A::from_scale_rotation_translation(
+            field.half_extent,
+            Default::default(),
+            field.center,
+        );
+        let world_from_box = world_from_mesh * mesh_from_box;
+        let determinant = world_from_box.matrix3.determinant();
+        if !determinant.is_finite() || determinant.abs() < 1e-12 {
+            return None;
+        }
+        // Box [-1, 1]³ to grid [0, 1]³.
+        let grid_from_box = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.5),
+            Default::default(),
+            Vec3::splat(0.5),
+        );
+        let grid_from_world = grid_from_box * world_from_box.inverse();
+        let m = world_from_mesh.matrix3;
+        Some(Self {
+            world_from_box: Mat4::from(world_from_box),
+            grid_from_world: Mat4::from(grid_from_world),
+            world_from_mesh: [
+                m.x_axis.extend(0.0),
+                m.y_axis.extend(0.0),
+                m.z_axis.extend(0.0),
+            ],
+            resolution: field.resolution.to_array(),
+            offset,
+        })
+    }
+}
+
+/// Every field in use and every occluder this frame.
+#[derive(Resource)]
+pub(crate) struct FieldBuffers {
+    /// Field assets in `cells`, in order, with their first cell.
+    layout: Vec<(AssetId<AoFieldData>, u32)>,
+    cells: RawBufferVec<Vec4>,
+    instances: RawBufferVec<FieldInstance>,
+    t_clip: RawBufferVec<f32>,
+    /// `cells` changed and must be written again.
+    dirty: bool,
+    /// Occluders to draw.
+    pub count: u32,
+}
+
+impl Default for FieldBuffers {
+    fn default() -> Self {
+        let mut t_clip = RawBufferVec::new(BufferUsages::STORAGE);
+        t_clip.extend(t_clip_table());
+        Self {
+            layout: Vec::new(),
+            cells: RawBufferVec::new(BufferUsages::STORAGE),
+            instances: RawBufferVec::new(BufferUsages::STORAGE),
+            t_clip,
+            dirty: true,
+            count: 0,
+        }
+    }
+}
+
+pub(crate) fn extract_fields(
+    mut buffers: ResMut<FieldBuffers>,
+    occluders: Extract<
+        Query<(
+            &ResolvedAoField,
+            &GlobalTransform,
+            Option<&InheritedVisibility>,
+        )>,
+    >,
+    fields: Extract<Res<Assets<AoFieldData>>>,
+) {
+    let buffers = buffers.as_mut();
+    let mut used: Vec<AssetId<AoFieldData>> = Vec::new();
+    for (field, _, visibility) in &occluders {
+        let id = field.0.id();
+        if visibility.is_none_or(|v| v.get()) && fields.contains(id) && !used.contains(&id) {
+            used.push(id);
+        }
+    }
+    if used.len() != buffers.layout.len()
+        || used
+            .iter()
+            .any(|id| !buffers.layout.iter().any(|(l, _)| l == id))
+    {
+        buffers.layout.clear();
+        buffers.cells.clear();
+        for id in used {
+            let field = fields.get(id).expect("checked above");
+            buffers.layout.push((id, buffers.cells.len() as u32));
+            buffers
+                .cells
+                .extend(field.cells.iter().map(|c| Vec4::from_array(*c)));
+        }
+        if buffers.cells.is_empty() {
+            buffers.cells.push(Vec4::ZERO);
+        }
+        buffers.dirty = true;
+    }
+    buffers.instances.clear();
+    for (field, transform, visibility) in &occluders {
+        if !visibility.is_none_or(|v| v.get()) {
+            continue;
+        }
+        let id = field.0.id();
+        let (Some(data), Some((_, offset))) = (
+            fields.get(id),
+            buffers.layout.iter().find(|(l, _)| *l == id),
+        ) else {
+            continue;
+        };
+        if let Some(instance) = FieldInstance::new(data, transform.affine(), *offset) {
+            buffers.instances.push(instance);
+        }
+    }
+    buffers.count = buffers.instances.len() as u32;
+    if buffers.count == 0 {
+        buffers.instances.push(Zeroable::zeroed());
+    }
+}
+
+pub(crate) fn write_field_buffers(
+    mut buffers: ResMut<FieldBuffers>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+) {
+    let buffers = buffers.as_mut();
+    if buffers.dirty || buffers.cells.buffer().is_none() {
+        buffers.cells.write_buffer(&device, &queue);
+        buffers.dirty = false;
+    }
+    if buffers.t_clip.buffer().is_none() {
+        buffers.t_clip.write_buffer(&device, &queue);
+    }
+    buffers.instances.write_buffer(&device, &queue);
+}
+
+/// The box pipelines: occlusion only (§3.2) and cone (§3.3.1).
+#[derive(Resource)]
+pub(crate) struct FieldPipelines {
+    layout: BindGroupLayoutDescriptor,
+    pub occlusion_only: CachedRenderPipelineId,
+    pub cone: CachedRenderPipelineId,
+}
+
+impl FromWorld for FieldPipelines {
+    fn from_world(world: &mut World) -> Self {
+        let storage = || storage_buffer_read_only_sized(false, None);
+        let layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_fields_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::VERTEX_FRAGMENT,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    storage(),
+                    storage(),
+                    storage(),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                ),
+            ),
+        );
+        let shader = load_embedded_asset!(world, "fields.wgsl");
+        // dst × (1 − src): occluders multiply their visibilities (§3.3.2).
+        let multiply = BlendComponent {
+            src_factor: BlendFactor::Zero,
+            dst_factor: BlendFactor::OneMinusSrc,
+            operation: BlendOperation::Add,
+        };
+        let cache = world.resource::<PipelineCache>();
+        let [occlusion_only, cone] = [Vec::new(), vec!["CONE".into()]].map(|shader_defs| {
+            cache.queue_render_pipeline(RenderPipelineDescriptor {
+                label: Some("dynamic_ao_fields_pipeline".into()),
+                layout: vec![layout.clone()],
+                vertex: VertexState {
+                    shader: shader.clone(),
+                    shader_defs: shader_defs.clone(),
+                    ..default()
+                },
+                fragment: Some(FragmentState {
+                    shader: shader.clone(),
+                    shader_defs,
+                    targets: vec![Some(ColorTargetState {
+                        format: FAR_OCCLUSION_FORMAT,
+                        blend: Some(BlendState {
+                            color: multiply,
+                            alpha: multiply,
+                        }),
+                        write_mask: ColorWrites::RED,
+                    })],
+                    ..default()
+                }),
+                // The back faces of each grid box: each pixel once, even from inside the box.
+                primitive: PrimitiveState {
+                    cull_mode: Some(Face::Front),
+                    ..default()
+                },
+                ..default()
+            })
+        });
+        Self {
+            layout,
+            occlusion_only,
+            cone,
+        }
+    }
+}
+
+#[derive(Component)]
+pub(crate) struct FieldBindGroup(pub BindGroup);
+
+pub(crate) fn prepare_field_bind_groups(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    pipelines: Res<FieldPipelines>,
+    pipeline_cache: Res<PipelineCache>,
+    view_uniforms: Res<ViewUniforms>,
+    buffers: Res<FieldBuffers>,
+    views: Query<(Entity, &DynamicAoView, &ViewPrepassTextures)>,
+) {
+    let (Some(view_binding), Some(instances), Some(cells), Some(t_clip)) = (
+        view_uniforms.uniforms.binding(),
+        buffers.instances.binding(),
+        buffers.cells.binding(),
+        buffers.t_clip.binding(),
+    ) else {
+        return;
+    };
+    for (entity, view, prepass) in &views {
+        let (true, Some(depth), Some(normal)) =
+            (view.fields, prepass.depth_view(), prepass.normal_view())
+        else {
+            commands.entity(entity).remove::<FieldBindGroup>();
+            continue;
+        };
+        let bind_group = render_device.create_bind_group(
+            "dynamic_ao_fields_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipelines.layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                instances.clone(),
+                cells.clone(),
+                t_clip.clone(),
+                depth,
+                normal,
+            )),
+        );
+        commands.entity(entity).insert(FieldBindGroup(bind_group));
+    }
+}
