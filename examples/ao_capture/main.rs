@@ -4,7 +4,8 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--half-res] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+//!     [--half-res] [--far-blend add|max] [--frames N] [--time SECONDS] --out-ao AO.png \
+//!     [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique list` prints the technique names: the image-space ones, `spheres` (the far field
@@ -30,6 +31,7 @@ use bevy::render::{
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
 use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
+use bevy_dynamic_ao::fields::ActiveAoField;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
 use options::Options;
@@ -126,6 +128,7 @@ fn scene_ready(
     mut capture: ResMut<Capture>,
     children: Query<&Children>,
     cameras: Query<(), With<Camera3d>>,
+    meshes: Query<(), With<Mesh3d>>,
     players: Query<Entity, With<AnimationPlayer>>,
     gltfs: Res<Assets<Gltf>>,
     mut graphs: ResMut<Assets<AnimationGraph>>,
@@ -174,10 +177,20 @@ fn scene_ready(
             },
             half_resolution: options.half_resolution,
             spheres: options.spheres,
+            fields: options.fields,
+            far_field_blend: options.far_blend,
             ..default()
         },
         readback.clone(),
     ));
+    if options.fields {
+        // Baked on load (or read from the disk cache) for every mesh, in its own space.
+        for entity in children.iter_descendants(ready.entity) {
+            if meshes.contains(entity) {
+                commands.entity(entity).insert(AoField::default());
+            }
+        }
+    }
     if options.spheres {
         // On the root, so every mesh of the scene casts far-field occlusion.
         commands
@@ -212,6 +225,7 @@ fn drive(
     mut commands: Commands,
     mut capture: ResMut<Capture>,
     assets: Res<AssetServer>,
+    fields: Query<Has<ActiveAoField>, With<AoField>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
@@ -233,6 +247,13 @@ fn drive(
                     "ao_capture: {} did not load in time",
                     capture.options.scene.display()
                 );
+                exit.write(AppExit::error());
+            }
+        }
+        Stage::Rendering { .. } if fields.iter().any(|active| !active) => {
+            // Fields still baking: the capture waits for them, within the load time limit.
+            if capture.frames > LOAD_TIMEOUT_FRAMES {
+                eprintln!("ao_capture: the AO fields were not baked in time");
                 exit.write(AppExit::error());
             }
         }

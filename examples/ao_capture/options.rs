@@ -2,49 +2,58 @@
 
 use std::path::PathBuf;
 
-use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique};
+use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique, FarFieldBlend};
 
 use crate::common::parse_number;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend add|max] \
 [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
 const MAX_SIZE: u32 = 8192;
 
-/// The far field alone.
+/// Names of the far-field terms: alone they are the whole occlusion, after `+` they join an
+/// image-space technique.
 const SPHERES: &str = "spheres";
-/// Suffix that adds the far field to an image-space technique.
-const PLUS_SPHERES: &str = "+spheres";
+const FIELDS: &str = "fields";
 
-/// Every name `--technique` takes: the plugin's techniques, the far field alone, and each
-/// image-space technique with the far field added.
+/// Every name `--technique` takes: the plugin's techniques, each far-field term alone, and each
+/// image-space technique with a far-field term added.
 pub fn technique_names() -> Vec<String> {
     let mut names: Vec<String> = AoTechnique::ALL
         .iter()
         .map(|(n, _)| n.to_string())
         .collect();
-    names.push(SPHERES.into());
+    names.extend([SPHERES.into(), FIELDS.into()]);
     for (name, technique) in AoTechnique::ALL {
         if !matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) {
-            names.push(format!("{name}{PLUS_SPHERES}"));
+            names.push(format!("{name}+{SPHERES}"));
+            names.push(format!("{name}+{FIELDS}"));
         }
     }
     names
 }
 
-/// A technique name: the image-space technique and whether the far field of spheres is on.
-fn parse_technique(name: &str) -> Option<(AoTechnique, bool)> {
-    if name == SPHERES {
-        return Some((AoTechnique::Off, true));
+/// What a technique name asks for: the image-space technique, spheres, fields.
+fn parse_technique(name: &str) -> Option<(AoTechnique, bool, bool)> {
+    match name {
+        SPHERES => return Some((AoTechnique::Off, true, false)),
+        FIELDS => return Some((AoTechnique::Off, false, true)),
+        _ => {}
     }
-    match name.strip_suffix(PLUS_SPHERES) {
-        Some(base) => AoTechnique::from_name(base)
-            .filter(|t| !matches!(t, AoTechnique::Off | AoTechnique::BevySsao))
-            .map(|t| (t, true)),
-        None => AoTechnique::from_name(name).map(|t| (t, false)),
+    let (base, far) = match name.split_once('+') {
+        Some((base, far)) => (base, Some(far)),
+        None => (name, None),
+    };
+    let technique = AoTechnique::from_name(base)?;
+    match far {
+        None => Some((technique, false, false)),
+        Some(_) if matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) => None,
+        Some(SPHERES) => Some((technique, true, false)),
+        Some(FIELDS) => Some((technique, false, true)),
+        Some(_) => None,
     }
 }
 
@@ -59,6 +68,10 @@ pub struct Options {
     pub technique: AoTechnique,
     /// Far-field occlusion from spheres on every mesh of the scene.
     pub spheres: bool,
+    /// Far-field occlusion from an AO field baked for every mesh of the scene.
+    pub fields: bool,
+    /// How the far-field term joins the image-space one.
+    pub far_blend: FarFieldBlend,
     pub preset: AoQuality,
     /// Half-width of the cross-bilateral blur, pixels (0 = off).
     pub blur: u32,
@@ -75,10 +88,15 @@ pub struct Options {
 impl Options {
     /// The technique as `--technique` names it.
     pub fn technique_name(&self) -> String {
-        match (self.technique, self.spheres) {
-            (AoTechnique::Off, true) => SPHERES.into(),
-            (technique, true) => format!("{}{PLUS_SPHERES}", technique.name()),
-            (technique, false) => technique.name().into(),
+        let far = match (self.spheres, self.fields) {
+            (true, _) => Some(SPHERES),
+            (_, true) => Some(FIELDS),
+            _ => None,
+        };
+        match (self.technique, far) {
+            (AoTechnique::Off, Some(far)) => far.into(),
+            (technique, Some(far)) => format!("{}+{far}", technique.name()),
+            (technique, None) => technique.name().into(),
         }
     }
 
@@ -89,6 +107,7 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
+        let mut far_blend = FarFieldBlend::Add;
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -126,6 +145,15 @@ impl Options {
                     ))?;
                 }
                 "--half-res" => half_resolution = true,
+                "--far-blend" => {
+                    far_blend = match value()?.as_str() {
+                        "add" => FarFieldBlend::Add,
+                        "max" => FarFieldBlend::Max,
+                        other => {
+                            return Err(format!("--far-blend takes add or max, got '{other}'"));
+                        }
+                    }
+                }
                 "--frames" => frames = parse_number("--frames", &value()?, 1u32)?,
                 "--blur" => {
                     blur = parse_number("--blur", &value()?, 0u32)?;
@@ -173,9 +201,11 @@ impl Options {
             height: height.ok_or_else(|| missing("--height"))?,
             radius: radius.ok_or_else(|| missing("--radius"))?,
             technique: technique
-                .map(|(t, _)| t)
+                .map(|(t, _, _)| t)
                 .ok_or_else(|| missing("--technique"))?,
-            spheres: technique.is_some_and(|(_, spheres)| spheres),
+            spheres: technique.is_some_and(|(_, spheres, _)| spheres),
+            fields: technique.is_some_and(|(_, _, fields)| fields),
+            far_blend,
             preset,
             blur,
             half_resolution,

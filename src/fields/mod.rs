@@ -33,6 +33,7 @@ pub use baker::{BakeError, BakeSettings, bake, grid_box};
 pub use component::{AoField, AoFieldCache};
 pub use format::{AoFieldData, AoFieldError};
 pub use loader::AoFieldLoader;
+pub use systems::ActiveAoField;
 
 pub(crate) use render::FieldPipelines;
 

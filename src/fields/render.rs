@@ -22,7 +22,7 @@ use bevy::utils::default;
 use bytemuck::{Pod, Zeroable};
 
 use super::format::AoFieldData;
-use super::systems::ResolvedAoField;
+use super::systems::ActiveAoField;
 use super::t_clip::t_clip_table;
 use crate::view::{DynamicAoView, FAR_OCCLUSION_FORMAT};
 
@@ -106,7 +106,7 @@ pub(crate) fn extract_fields(
     mut buffers: ResMut<FieldBuffers>,
     occluders: Extract<
         Query<(
-            &ResolvedAoField,
+            &ActiveAoField,
             &GlobalTransform,
             Option<&InheritedVisibility>,
         )>,

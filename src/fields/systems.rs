@@ -17,9 +17,10 @@ use super::component::{AoField, AoFieldCache};
 use super::format::AoFieldData;
 use crate::reference::scene::{Triangle, TriangleScene};
 
-/// The field asset an occluder entity casts from, once it exists.
-#[derive(Component, Clone, Debug)]
-pub(crate) struct ResolvedAoField(pub Handle<AoFieldData>);
+/// The field an [`AoField`] occluder casts from, added by the plugin once that field exists
+/// (loaded, or baked on load). Until then the occluder casts nothing.
+#[derive(Component, Clone, Debug, PartialEq)]
+pub struct ActiveAoField(pub Handle<AoFieldData>);
 
 type BakeKey = (AssetId<Mesh>, [u32; 4]);
 type BakeResult = Result<AoFieldData, String>;
@@ -108,7 +109,7 @@ pub(crate) fn resolve_fields(
         Entity,
         &AoField,
         Option<&Mesh3d>,
-        Option<&ResolvedAoField>,
+        Option<&ActiveAoField>,
         Option<&Name>,
     )>,
     meshes: Res<Assets<Mesh>>,
@@ -164,7 +165,7 @@ pub(crate) fn resolve_fields(
         match handle {
             Some(Ok(handle)) => {
                 if resolved.is_none_or(|r| r.0 != handle) {
-                    commands.entity(entity).insert(ResolvedAoField(handle));
+                    commands.entity(entity).insert(ActiveAoField(handle));
                 }
             }
             Some(Err(error)) => {

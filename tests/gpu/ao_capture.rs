@@ -333,8 +333,8 @@ fn captures_the_generated_scene_close_to_ground_truth() {
 fn captures_the_far_field_of_the_generated_scene() {
     let dir = temp_dir("capture_spheres");
     let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
-    let capture = |technique: &str| {
-        let out_ao = dir.join(format!("{technique}.png"));
+    let capture_with = |technique: &str, blend: &str| {
+        let out_ao = dir.join(format!("{technique}_{blend}.png"));
         let out = run(&[
             "--scene",
             scene_path().to_str().unwrap(),
@@ -346,6 +346,8 @@ fn captures_the_far_field_of_the_generated_scene() {
             &radius.to_string(),
             "--technique",
             technique,
+            "--far-blend",
+            blend,
             "--time",
             &time.to_string(),
             "--out-ao",
@@ -365,9 +367,13 @@ fn captures_the_far_field_of_the_generated_scene() {
             .expect("a 16-bit grayscale PNG")
             .2
     };
+    let capture = |technique: &str| capture_with(technique, "add");
     let spheres = capture("spheres");
     let near = capture("near-field");
     let both = capture("near-field+spheres");
+    let fields = capture("fields");
+    let near_fields = capture("near-field+fields");
+    let near_fields_max = capture_with("near-field+fields", "max");
     let (bvh, view) = generated_scene(time, w, h);
     let truth = |radius: f32| {
         ground_truth_visibility(
@@ -392,6 +398,18 @@ fn captures_the_far_field_of_the_generated_scene() {
     let (_, spheres_wide) = report("spheres", &spheres);
     let (_, near_wide) = report("near-field", &near);
     let (_, both_wide) = report("near-field+spheres", &both);
+    let (_, fields_wide) = report("fields", &fields);
+    let (_, near_fields_wide) = report("near-field+fields", &near_fields);
+    let (_, near_fields_max_wide) = report("near-field+fields, max blend", &near_fields_max);
+    // Fields see every box whole, the floor included: over the wide radius they alone come
+    // closer to ground truth than the near field. Added to it they count the near boxes twice;
+    // the max blend does not.
+    assert!(
+        fields_wide < near_wide,
+        "fields {fields_wide} vs near field {near_wide}"
+    );
+    assert!(near_fields_max_wide < near_wide);
+    assert!(near_fields_max_wide < near_fields_wide);
     // Beyond the near field's radius the floor still receives occlusion from the cube and the
     // pillar (ground truth over 2 m); the near field shows none there, the far field does.
     let beyond: Vec<usize> = (0..truth_wide.len())
@@ -413,10 +431,11 @@ fn captures_the_far_field_of_the_generated_scene() {
     let mean = |v: &[f32]| beyond.iter().map(|&i| 1.0 - v[i]).sum::<f32>() / beyond.len() as f32;
     println!(
         "floor beyond the near field's reach ({} pixels), mean occlusion: ground truth {:.3}, \
-         far field {:.3}, near field {:.3}",
+         spheres {:.3}, fields {:.3}, near field {:.3}",
         beyond.len(),
         mean(&truth_wide),
         mean(&spheres),
+        mean(&fields),
         mean(&near)
     );
     // Inscribed spheres fill only part of a box, and each is cut off at its reach d_far, so
