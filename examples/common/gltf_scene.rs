@@ -100,6 +100,7 @@ pub fn cube_on_plane() -> (Vec<MeshData>, Vec<Node>) {
 /// Encodes meshes and nodes as a `.glb` file.
 pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
     let mut glb = GlbBuilder::default();
+    let mesh_json: Vec<Value> = meshes.iter().map(|m| glb.push_mesh(m)).collect();
     let mut push = |bytes, target, accessor| glb.push(bytes, target, accessor);
     let floats = |v: &[[f32; 3]]| {
         v.iter()
@@ -107,37 +108,6 @@ pub fn write_glb(meshes: &[MeshData], nodes: &[Node]) -> Vec<u8> {
             .flat_map(|f| f.to_le_bytes())
             .collect::<Vec<u8>>()
     };
-
-    let mut mesh_json = Vec::new();
-    for mesh in meshes {
-        let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for p in &mesh.positions {
-            min = min.min(Vec3::from(*p));
-            max = max.max(Vec3::from(*p));
-        }
-        let count = mesh.positions.len();
-        let position = push(
-            floats(&mesh.positions),
-            Some(34962),
-            json!({
-            "componentType": 5126, "count": count, "type": "VEC3",
-            "min": min.to_array(), "max": max.to_array() }),
-        );
-        let normal = push(
-            floats(&mesh.normals),
-            Some(34962),
-            json!({
-            "componentType": 5126, "count": count, "type": "VEC3" }),
-        );
-        let indices = push(
-            mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect(),
-            Some(34963),
-            json!({ "componentType": 5125, "count": mesh.indices.len(), "type": "SCALAR" }),
-        );
-        mesh_json.push(json!({ "primitives": [{
-            "attributes": { "POSITION": position, "NORMAL": normal },
-            "indices": indices, "material": 0 }] }));
-    }
 
     let mut node_json = Vec::new();
     let mut cameras = Vec::new();
@@ -225,6 +195,38 @@ impl GlbBuilder {
         accessor["bufferView"] = json!(self.views.len() - 1);
         self.accessors.push(accessor);
         self.accessors.len() - 1
+    }
+
+    /// Appends a mesh's positions, normals and indices; returns its glTF mesh object (material 0).
+    pub fn push_mesh(&mut self, mesh: &MeshData) -> Value {
+        let floats = |v: &[[f32; 3]]| -> Vec<u8> {
+            v.iter().flatten().flat_map(|f| f.to_le_bytes()).collect()
+        };
+        let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for p in &mesh.positions {
+            min = min.min(Vec3::from(*p));
+            max = max.max(Vec3::from(*p));
+        }
+        let count = mesh.positions.len();
+        let position = self.push(
+            floats(&mesh.positions),
+            Some(34962),
+            json!({ "componentType": 5126, "count": count, "type": "VEC3",
+                    "min": min.to_array(), "max": max.to_array() }),
+        );
+        let normal = self.push(
+            floats(&mesh.normals),
+            Some(34962),
+            json!({ "componentType": 5126, "count": count, "type": "VEC3" }),
+        );
+        let indices = self.push(
+            mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect(),
+            Some(34963),
+            json!({ "componentType": 5125, "count": mesh.indices.len(), "type": "SCALAR" }),
+        );
+        json!({ "primitives": [{
+            "attributes": { "POSITION": position, "NORMAL": normal },
+            "indices": indices, "material": 0 }] })
     }
 
     /// The `.glb` file of `doc` with the collected accessors, views and binary chunk.

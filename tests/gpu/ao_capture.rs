@@ -65,6 +65,16 @@ fn committed_walker_is_what_the_generator_writes() {
 }
 
 #[test]
+fn committed_toasters_are_what_the_generator_writes() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/toasters.glb");
+    let committed = std::fs::read(path).expect("assets/scenes/toasters.glb");
+    assert!(
+        committed == crate::toasters::toasters_glb(),
+        "assets/scenes/toasters.glb is stale: run `cargo run --example generate_assets`"
+    );
+}
+
+#[test]
 fn lists_its_techniques() {
     let out = run(&["--technique", "list"]);
     assert!(out.status.success());
@@ -75,6 +85,8 @@ fn lists_its_techniques() {
         "bevy-ssao",
         "spheres",
         "near-field+spheres",
+        "fields",
+        "near-field+fields",
     ] {
         assert!(
             text.lines().any(|l| l == name),

@@ -84,6 +84,35 @@ fn deforming_characters_renders_headless() {
     std::fs::remove_file(&out).ok();
 }
 
+#[test]
+fn toasters_renders_headless() {
+    let binary = example_binary("toasters");
+    let out = std::env::temp_dir().join(format!("dynamic_ao_toasters_{}.png", std::process::id()));
+    let run = |extra: &[&str]| {
+        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let mut args = vec!["--headless", "--width", "160", "--height", "120"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        Command::new(&binary).args(&args).output().expect("runs")
+    };
+    let result = run(&["--frames", "20", "--stress", "16", "--debug-view"]);
+    assert!(
+        result.status.success(),
+        "toasters failed:\n{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let image = image_luma(&out);
+    let occluded = image.iter().filter(|v| **v < 240).count();
+    println!("toasters debug view: {occluded} occluded pixels");
+    assert!(
+        occluded > 200,
+        "the toasters and the counter should cast occlusion"
+    );
+    let bad = run(&["--stress", "many"]);
+    assert_eq!(bad.status.code(), Some(2));
+    std::fs::remove_file(&out).ok();
+}
+
 /// The mean of the colour channels of an 8-bit RGB(A) PNG, per pixel.
 fn image_luma(path: &Path) -> Vec<u8> {
     let decoder = png::Decoder::new(std::io::BufReader::new(

@@ -8,6 +8,8 @@ mod character;
 mod common;
 #[path = "../../examples/common/gltf_scene.rs"]
 mod gltf_scene;
+#[path = "../../examples/common/toasters.rs"]
+mod toasters;
 
 mod ao_capture;
 mod back_layer;
