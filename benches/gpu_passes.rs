@@ -5,7 +5,9 @@
 //! `-- --frames 60` for longer measurements and `-- --only "Bevy SSAO High,spheres"` to run only
 //! the configurations whose names contain one of the comma-separated words).
 //! The `far field, N spheres` rows splat N occluder spheres (small balls with a
-//! `SphereOccluder` each, scattered over the view) with the image-space term off.
+//! `SphereOccluder` each, scattered over the view) with the image-space term off; the
+//! `AO fields, N occluders` rows draw N toaster-sized boxes with an `AoField` each (one baked
+//! 32³ field shared by all).
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
 
 #[path = "../examples/common/mod.rs"]
@@ -24,6 +26,7 @@ use bevy::render::{
     diagnostic::RenderDiagnosticsPlugin, render_resource::TextureFormat,
     renderer::RenderAdapterInfo,
 };
+use bevy_dynamic_ao::fields::ActiveAoField;
 use bevy_dynamic_ao::prelude::*;
 
 const WARMUP_FRAMES: u32 = 10;
@@ -35,6 +38,8 @@ enum Config {
     Preset(AoPreset),
     /// The far field alone, from about this many spheres.
     Spheres(u32),
+    /// AO fields alone, from this many occluders.
+    Fields(u32),
 }
 
 impl Config {
@@ -44,6 +49,7 @@ impl Config {
             Config::BevySsao(level) => format!("Bevy SSAO {level:?}"),
             Config::Preset(preset) => format!("preset {}", preset.name()),
             Config::Spheres(count) => format!("far field, {count} spheres"),
+            Config::Fields(count) => format!("AO fields, {count} occluders"),
         }
     }
 }
@@ -78,6 +84,9 @@ fn main() {
         Config::Spheres(1_000),
         Config::Spheres(10_000),
         Config::Spheres(100_000),
+        Config::Fields(1),
+        Config::Fields(16),
+        Config::Fields(256),
     ];
     let only: Option<Vec<String>> = args
         .iter()
@@ -107,6 +116,7 @@ fn main() {
         ("dynamic_ao_upsample", "upsample"),
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_spheres", "spheres"),
+        ("dynamic_ao_fields", "fields"),
         ("dynamic_ao_compose", "compose"),
     ];
     println!(
@@ -157,6 +167,18 @@ fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
         *adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
     }
     spawn_scene(app.world_mut(), config, size);
+    // Fields are baked on the async pool; measure once every occluder has its field.
+    for _ in 0..2000 {
+        let world = app.world_mut();
+        let waiting = world
+            .query_filtered::<(), (With<AoField>, Without<ActiveAoField>)>()
+            .iter(world)
+            .count();
+        if waiting == 0 {
+            break;
+        }
+        app.update();
+    }
     for _ in 0..WARMUP_FRAMES {
         app.update();
     }
@@ -237,6 +259,13 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 ..default()
             });
         }
+        Config::Fields(_) => {
+            camera.insert(DynamicAo {
+                technique: AoTechnique::Off,
+                spheres: false,
+                ..default()
+            });
+        }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();
     let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));
@@ -282,6 +311,24 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                     count: 16,
                     ..default()
                 },
+            ));
+        }
+    }
+    if let Config::Fields(count) = config {
+        // Toaster-sized boxes on a grid over the floor, one baked field shared by all.
+        let toaster = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Cuboid::new(0.3, 0.2, 0.17));
+        let side = (*count as f32).sqrt().ceil() as u32;
+        for i in 0..*count {
+            let (u, v) = ((i % side) as f32, (i / side) as f32);
+            let step = 5.0 / side as f32;
+            world.spawn((
+                Mesh3d(toaster.clone()),
+                MeshMaterial3d(material.clone()),
+                Transform::from_xyz(-2.5 + (u + 0.5) * step, 0.1, -1.2 + (v + 0.5) * step * 0.6)
+                    .with_rotation(Quat::from_rotation_y(i as f32)),
+                AoField::default(),
             ));
         }
     }
