@@ -47,7 +47,7 @@ pub fn toaster_mesh() -> MeshData {
 
 /// Where toaster `k` starts, where it lands, and how it tumbles on the way.
 fn flight(k: usize) -> (Vec3, Vec3, Vec3) {
-    let side = if k % 2 == 0 { -1.0 } else { 1.0 };
+    let side = if k.is_multiple_of(2) { -1.0 } else { 1.0 };
     let start = Vec3::new(
         side * (2.5 + 0.3 * k as f32),
         2.4 + 0.2 * k as f32,

@@ -48,7 +48,7 @@ impl FieldInstance {
         );
         let world_from_box = world_from_mesh * mesh_from_box;
         let determinant = world_from_box.matrix3.determinant();
-        if !determinant.is_finite() || determinant.abs() < 1e-12 {
+        if !world_from_box.is_finite() || !determinant.is_finite() || determinant.abs() < 1e-12 {
             return None;
         }
         // Box [-1, 1]³ to grid [0, 1]³.

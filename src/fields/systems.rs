@@ -9,7 +9,7 @@ use bevy::log::{info, warn};
 use bevy::math::Affine3A;
 use bevy::mesh::{Mesh, Mesh3d};
 use bevy::platform::collections::{HashMap, HashSet};
-use bevy::prelude::Name;
+use bevy::prelude::{GlobalTransform, Name};
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
 use super::baker::{BakeSettings, bake};
@@ -111,12 +111,14 @@ pub(crate) fn resolve_fields(
         Option<&Mesh3d>,
         Option<&ActiveAoField>,
         Option<&Name>,
+        Option<&GlobalTransform>,
     )>,
     meshes: Res<Assets<Mesh>>,
     mut fields: ResMut<Assets<AoFieldData>>,
     cache: Res<AoFieldCache>,
     mut baked: ResMut<BakedFields>,
     mut warned: Local<HashSet<Entity>>,
+    mut degenerate: Local<HashSet<Entity>>,
 ) {
     // Finished bakes become assets.
     let mut finished = Vec::new();
@@ -132,7 +134,22 @@ pub(crate) fn resolve_fields(
             .insert(key, result.map(|field| fields.add(field)));
     }
 
-    for (entity, field, mesh, resolved, name) in &occluders {
+    for (entity, field, mesh, resolved, name, transform) in &occluders {
+        // The render pass skips an occluder it cannot place; say so once.
+        let placeable = transform.is_none_or(|t| {
+            let affine = t.affine();
+            affine.is_finite() && affine.matrix3.determinant().abs() > 1e-12
+        });
+        if !placeable {
+            if degenerate.insert(entity) {
+                warn!(
+                    "AoField on {entity}: its transform is zero-size or not finite; it casts no \
+                     field while that lasts"
+                );
+            }
+        } else {
+            degenerate.remove(&entity);
+        }
         let handle = match field {
             AoField::Asset(handle) => Some(Ok(handle.clone())),
             AoField::Bake(settings) => {
@@ -163,19 +180,15 @@ pub(crate) fn resolve_fields(
             }
         };
         match handle {
-            Some(Ok(handle)) => {
-                if resolved.is_none_or(|r| r.0 != handle) {
-                    commands.entity(entity).insert(ActiveAoField(handle));
-                }
+            Some(Ok(handle)) if resolved.is_none_or(|r| r.0 != handle) => {
+                commands.entity(entity).insert(ActiveAoField(handle));
             }
-            Some(Err(error)) => {
-                if warned.insert(entity) {
-                    let label =
-                        name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
-                    warn!("AoField on {label} casts no field: {error}");
-                }
+            Some(Err(error)) if warned.insert(entity) => {
+                let label =
+                    name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
+                warn!("AoField on {label} casts no field: {error}");
             }
-            None => {}
+            _ => {}
         }
     }
 }

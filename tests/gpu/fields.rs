@@ -321,3 +321,72 @@ fn band(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
     }
     sum / n
 }
+
+/// Baking on load goes through the disk cache: the first run writes the field there, a corrupt
+/// cache file is baked again and replaced, and bad occluders (no triangles, a zero-scale or NaN
+/// transform, a bake request without a mesh) are skipped without a panic.
+#[test]
+fn baked_fields_are_cached_on_disk_and_bad_occluders_are_skipped() {
+    let cache = std::env::temp_dir().join(format!("dynamic_ao_field_cache_{}", std::process::id()));
+    std::fs::remove_dir_all(&cache).ok();
+    let run = |extra_bad: bool| {
+        let mut scene = scenes::cube_on_plane();
+        scene.fields.push((1, quick_field()));
+        let mut gpu = Gpu::new(&scene, fields_only(FieldShading::Cone));
+        gpu.app.world_mut().insert_resource(AoFieldCache {
+            folder: Some(cache.clone()),
+        });
+        if extra_bad {
+            let world = gpu.app.world_mut();
+            let empty = world.resource_mut::<Assets<Mesh>>().add(Mesh::new(
+                bevy::mesh::PrimitiveTopology::TriangleList,
+                bevy::asset::RenderAssetUsages::default(),
+            ));
+            let cube = world
+                .resource_mut::<Assets<Mesh>>()
+                .add(Cuboid::new(0.5, 0.5, 0.5));
+            world.spawn((Mesh3d(empty), quick_field(), Transform::IDENTITY));
+            world.spawn((
+                Mesh3d(cube.clone()),
+                quick_field(),
+                Transform::from_scale(Vec3::ZERO),
+            ));
+            world.spawn((
+                Mesh3d(cube),
+                quick_field(),
+                Transform::from_xyz(f32::NAN, 0.0, 0.0),
+            ));
+            world.spawn((quick_field(), Transform::IDENTITY));
+        }
+        for _ in 0..400 {
+            gpu.update(1);
+            let world = gpu.app.world_mut();
+            let active = world
+                .query_filtered::<(), With<bevy_dynamic_ao::fields::ActiveAoField>>()
+                .iter(world)
+                .count();
+            if active > 2 * usize::from(extra_bad) {
+                break;
+            }
+        }
+        let frame = gpu.frame(3);
+        assert!(frame.visibility.iter().all(|v| v.is_finite()));
+        let darkest = frame.visibility.iter().copied().fold(1.0, f32::min);
+        assert!(darkest < 0.8, "the cube's field should show");
+    };
+    run(false);
+    let files: Vec<_> = std::fs::read_dir(&cache)
+        .expect("the cache folder exists")
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "one field baked, one file cached");
+    assert!(AoFieldData::from_bytes(&std::fs::read(&files[0]).unwrap()).is_ok());
+    std::fs::write(&files[0], b"garbage").unwrap();
+    run(true);
+    let bytes = std::fs::read(&files[0]).unwrap();
+    assert!(
+        AoFieldData::from_bytes(&bytes).is_ok(),
+        "the corrupt cache file is replaced"
+    );
+    std::fs::remove_dir_all(&cache).ok();
+}
