@@ -16,7 +16,8 @@ pub enum DynamicAoSystems {
     BackFaces,
     /// The view's image-space technique (near-field, horizon-based or ray march).
     NearField,
-    /// Splats the spheres of far-field occluders into the far-field buffer.
+    /// The far field: splats the spheres of sphere occluders, and draws the grid boxes of AO
+    /// field occluders.
     FarField,
     /// Cross-bilateral blur of the occlusion.
     Filter,

@@ -270,7 +270,7 @@ pub enum FieldShading {
     OcclusionOnly,
 }
 
-/// How near-field (image-space) and far-field (sphere) occlusion combine.
+/// How near-field (image-space) and far-field (sphere and AO field) occlusion combine.
 ///
 /// Both terms see an occluder that is on screen and close by, so adding them counts it twice;
 /// the paper accepts that and relies on A_ψ = 1 inside the spheres. Taking the larger term never

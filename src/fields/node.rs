@@ -18,7 +18,7 @@ pub(crate) fn field_pass(
     view: ViewQuery<(
         &DynamicAoView,
         &DynamicAoTextures,
-        &FieldBindGroup,
+        Option<&FieldBindGroup>,
         &ViewUniformOffset,
     )>,
     pipelines: Res<FieldPipelines>,
@@ -27,6 +27,9 @@ pub(crate) fn field_pass(
     mut ctx: RenderContext,
 ) {
     let (ao_view, textures, bind_group, view_offset) = view.into_inner();
+    if !ao_view.fields {
+        return;
+    }
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     // Visibility starts at 1 (open) and each occluder multiplies it down; cleared even when no
@@ -53,6 +56,7 @@ pub(crate) fn field_pass(
         FieldShading::OcclusionOnly => pipelines.occlusion_only,
     };
     if buffers.count > 0
+        && let Some(bind_group) = bind_group
         && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline)
     {
         pass.set_render_pipeline(render_pipeline);

@@ -91,9 +91,12 @@ impl Default for FieldBuffers {
     fn default() -> Self {
         let mut t_clip = RawBufferVec::new(BufferUsages::STORAGE);
         t_clip.extend(t_clip_table());
+        // A binding needs a buffer even before the first field exists; nothing reads this cell.
+        let mut cells = RawBufferVec::new(BufferUsages::STORAGE);
+        cells.push(Vec4::ZERO);
         Self {
             layout: Vec::new(),
-            cells: RawBufferVec::new(BufferUsages::STORAGE),
+            cells,
             instances: RawBufferVec::new(BufferUsages::STORAGE),
             t_clip,
             dirty: true,

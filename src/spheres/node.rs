@@ -11,16 +11,24 @@ use bevy::render::{
 };
 
 use super::splat::{SphereBuffer, SplatBindGroup, SplatPipeline};
-use crate::view::DynamicAoTextures;
+use crate::view::{DynamicAoTextures, DynamicAoView};
 
 pub(crate) fn splat_pass(
-    view: ViewQuery<(&DynamicAoTextures, &SplatBindGroup, &ViewUniformOffset)>,
+    view: ViewQuery<(
+        &DynamicAoView,
+        &DynamicAoTextures,
+        Option<&SplatBindGroup>,
+        &ViewUniformOffset,
+    )>,
     pipeline: Res<SplatPipeline>,
     pipeline_cache: Res<PipelineCache>,
     spheres: Res<SphereBuffer>,
     mut ctx: RenderContext,
 ) {
-    let (textures, bind_group, view_offset) = view.into_inner();
+    let (ao_view, textures, bind_group, view_offset) = view.into_inner();
+    if !ao_view.far_field {
+        return;
+    }
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     // Cleared even without spheres: compose reads this buffer whenever the far field is on.
@@ -42,6 +50,7 @@ pub(crate) fn splat_pass(
     });
     let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_spheres");
     if spheres.count > 0
+        && let Some(bind_group) = bind_group
         && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline.pipeline)
     {
         pass.set_render_pipeline(render_pipeline);
