@@ -20,7 +20,9 @@ use bevy::render::{
     view::Msaa,
 };
 
+use crate::fields::ActiveAoField;
 use crate::settings::{AoTechnique, DynamicAo};
+use crate::spheres::OccluderSpheres;
 
 /// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.
 pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
@@ -210,7 +212,12 @@ fn extract_views(
             With<Camera3d>,
         >,
     >,
+    sphere_occluders: Extract<Query<(), With<OccluderSpheres>>>,
+    field_occluders: Extract<Query<(), With<ActiveAoField>>>,
 ) {
+    // Without occluders of a kind its pass, buffer clear and compose read are skipped.
+    let any_spheres = !sphere_occluders.is_empty();
+    let any_fields = !field_occluders.is_empty();
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
         if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
@@ -225,8 +232,8 @@ fn extract_views(
         let horizon = ao.horizon.sanitized();
         let rays = ao.ray_march.sanitized();
         // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
-        let far_field = ao.spheres && ao.technique != AoTechnique::BevySsao;
-        let fields = ao.fields && ao.technique != AoTechnique::BevySsao;
+        let far_field = ao.spheres && any_spheres && ao.technique != AoTechnique::BevySsao;
+        let fields = ao.fields && any_fields && ao.technique != AoTechnique::BevySsao;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
