@@ -206,6 +206,42 @@ fn exit_on_escape(keys: Res<ButtonInput<KeyCode>>, mut exit: MessageWriter<AppEx
     }
 }
 
+/// An asset the example cannot run without, and where it comes from.
+#[derive(Resource)]
+pub struct RequiredAsset {
+    pub handle: UntypedHandle,
+    pub path: &'static str,
+}
+
+/// Stops the app with a message when the [`RequiredAsset`] fails to load.
+pub fn fail_without_required_asset(
+    required: Res<RequiredAsset>,
+    assets: Res<AssetServer>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    if let Some(bevy::asset::LoadState::Failed(error)) = assets.get_load_state(&required.handle) {
+        eprintln!(
+            "error: cannot load {} ({error}); run `cargo run --example generate_assets`",
+            required.path
+        );
+        exit.write(AppExit::error());
+    }
+}
+
+/// Keys the far-field examples share: N switches the near field, D the debug view.
+pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dynamic_ao::DynamicAo) {
+    use bevy_dynamic_ao::AoTechnique;
+    if keys.just_pressed(KeyCode::KeyN) {
+        ao.technique = match ao.technique {
+            AoTechnique::Off => AoTechnique::NearField,
+            _ => AoTechnique::Off,
+        };
+    }
+    if keys.just_pressed(KeyCode::KeyD) {
+        ao.debug_view = !ao.debug_view;
+    }
+}
+
 /// Marker of the on-screen help line.
 #[derive(Component)]
 pub struct HelpLine;

@@ -12,7 +12,7 @@ mod common;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::gltf::GltfAssetLabel;
 use bevy::prelude::*;
-use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
+use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
 use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
 
@@ -55,7 +55,15 @@ fn main() {
     app.insert_resource(options)
         .add_plugins(DynamicAoPlugin)
         .add_systems(Startup, setup)
-        .add_systems(Update, (walk, controls, show_settings, fail_without_walker))
+        .add_systems(
+            Update,
+            (
+                walk,
+                controls,
+                show_settings,
+                common::fail_without_required_asset,
+            ),
+        )
         .run();
 }
 
@@ -80,21 +88,6 @@ struct Path {
 struct WalkAnimation {
     graph: Handle<AnimationGraph>,
     node: AnimationNodeIndex,
-    scene: Handle<WorldAsset>,
-}
-
-/// Without the walker there is nothing to show: say why and stop.
-fn fail_without_walker(
-    animation: Res<WalkAnimation>,
-    assets: Res<AssetServer>,
-    mut exit: MessageWriter<AppExit>,
-) {
-    if let Some(bevy::asset::LoadState::Failed(error)) = assets.get_load_state(&animation.scene) {
-        eprintln!(
-            "error: cannot load {WALKER} ({error}); run `cargo run --example generate_assets`"
-        );
-        exit.write(AppExit::error());
-    }
 }
 
 fn setup(world: &mut World) {
@@ -106,10 +99,10 @@ fn setup(world: &mut World) {
     let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(WALKER));
     let (graph, node) = AnimationGraph::from_clip(clip);
     let graph = world.resource_mut::<Assets<AnimationGraph>>().add(graph);
-    world.insert_resource(WalkAnimation {
-        graph,
-        node,
-        scene: scene.clone(),
+    world.insert_resource(WalkAnimation { graph, node });
+    world.insert_resource(common::RequiredAsset {
+        handle: scene.clone().untyped(),
+        path: WALKER,
     });
 
     let mut commands = world.commands();
@@ -226,12 +219,7 @@ fn controls(
         show_spheres.0 = !show_spheres.0;
     }
     for mut ao in &mut cameras {
-        if keys.just_pressed(KeyCode::KeyN) {
-            ao.technique = match ao.technique {
-                AoTechnique::Off => AoTechnique::NearField,
-                _ => AoTechnique::Off,
-            };
-        }
+        common::near_field_and_debug_keys(&keys, &mut ao);
         if keys.just_pressed(KeyCode::KeyF) {
             ao.spheres = !ao.spheres;
         }
@@ -240,9 +228,6 @@ fn controls(
                 FarFieldBlend::Add => FarFieldBlend::Max,
                 FarFieldBlend::Max => FarFieldBlend::Add,
             };
-        }
-        if keys.just_pressed(KeyCode::KeyD) {
-            ao.debug_view = !ao.debug_view;
         }
     }
 }

@@ -10,11 +10,10 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use bevy::asset::LoadState;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::gltf::GltfAssetLabel;
 use bevy::prelude::*;
-use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
+use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
 use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
 
@@ -62,14 +61,18 @@ fn main() {
         .add_systems(Startup, setup)
         .add_systems(
             Update,
-            (circle, controls, show_settings, fail_without_scene),
+            (
+                circle,
+                controls,
+                show_settings,
+                common::fail_without_required_asset,
+            ),
         )
         .run();
 }
 
 #[derive(Resource)]
 struct Scene {
-    scene: Handle<WorldAsset>,
     graph: Handle<AnimationGraph>,
     node: AnimationNodeIndex,
 }
@@ -92,10 +95,10 @@ fn setup(world: &mut World) {
     let clip = assets.load(GltfAssetLabel::Animation(0).from_asset(SCENE));
     let (graph, node) = AnimationGraph::from_clip(clip);
     let graph = world.resource_mut::<Assets<AnimationGraph>>().add(graph);
-    world.insert_resource(Scene {
-        scene: scene.clone(),
-        graph,
-        node,
+    world.insert_resource(Scene { graph, node });
+    world.insert_resource(common::RequiredAsset {
+        handle: scene.clone().untyped(),
+        path: SCENE,
     });
 
     let mut commands = world.commands();
@@ -206,12 +209,7 @@ fn circle(time: Res<Time>, mut toasters: Query<(&Circling, &mut Transform)>) {
 
 fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>) {
     for mut ao in &mut cameras {
-        if keys.just_pressed(KeyCode::KeyN) {
-            ao.technique = match ao.technique {
-                AoTechnique::Off => AoTechnique::NearField,
-                _ => AoTechnique::Off,
-            };
-        }
+        common::near_field_and_debug_keys(&keys, &mut ao);
         if keys.just_pressed(KeyCode::KeyF) {
             ao.fields = !ao.fields;
         }
@@ -220,9 +218,6 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
                 FieldShading::Cone => FieldShading::OcclusionOnly,
                 FieldShading::OcclusionOnly => FieldShading::Cone,
             };
-        }
-        if keys.just_pressed(KeyCode::KeyD) {
-            ao.debug_view = !ao.debug_view;
         }
     }
 }
@@ -245,18 +240,4 @@ fn show_settings(
         ao.field_shading,
         on(ao.debug_view),
     );
-}
-
-/// Without the scene there is nothing to show: say why and stop.
-fn fail_without_scene(
-    scene: Res<Scene>,
-    assets: Res<AssetServer>,
-    mut exit: MessageWriter<AppExit>,
-) {
-    if let Some(LoadState::Failed(error)) = assets.get_load_state(&scene.scene) {
-        eprintln!(
-            "error: cannot load {SCENE} ({error}); run `cargo run --example generate_assets`"
-        );
-        exit.write(AppExit::error());
-    }
 }

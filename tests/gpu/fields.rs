@@ -13,7 +13,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{fields::field_occlusion, metrics::rmse, scene::TriangleScene};
 
 use crate::examples::example_binary;
-use crate::harness::{GPU_TURN, Gpu, HEIGHT, SceneSpec, WIDTH, difference_stats};
+use crate::harness::{GPU_TURN, Gpu, SceneSpec, WIDTH, band, difference_stats};
 use crate::scenes;
 
 fn small_field() -> AoFieldData {
@@ -308,18 +308,6 @@ fn an_off_screen_box_darkens_the_floor_through_its_field() {
         "the field should find the box's occlusion"
     );
     assert!(error(&with_fields.visibility) < error(&near_only.visibility));
-}
-
-/// Mean occlusion of the columns `columns` of a visibility image.
-fn band(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
-    let (mut sum, mut n) = (0.0, 0.0);
-    for y in 0..HEIGHT {
-        for x in columns.clone() {
-            sum += 1.0 - visibility[(y * WIDTH + x) as usize];
-            n += 1.0;
-        }
-    }
-    sum / n
 }
 
 /// Baking on load goes through the disk cache: the first run writes the field there, a corrupt

@@ -402,6 +402,18 @@ pub fn difference_stats(gpu: &[f32], cpu: &[f32], mask: &[bool]) -> (f32, f32) {
     (mean, diffs[diffs.len() * 99 / 100])
 }
 
+/// Mean occlusion (1 − visibility) of the image columns `columns`.
+pub fn band(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for y in 0..HEIGHT {
+        for x in columns.clone() {
+            sum += 1.0 - visibility[(y * WIDTH + x) as usize];
+            n += 1.0;
+        }
+    }
+    sum / n
+}
+
 /// Index of pixel (x, y).
 pub fn index(x: u32, y: u32) -> usize {
     (y * WIDTH + x) as usize

@@ -9,7 +9,7 @@ use bevy_dynamic_ao::FarFieldBlend;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{metrics::rmse, spheres::far_field_occlusion};
 
-use crate::harness::{Gpu, HEIGHT, SceneSpec, WIDTH, difference_stats};
+use crate::harness::{Gpu, SceneSpec, WIDTH, band, difference_stats};
 
 fn occluder(count: u32) -> SphereOccluder {
     SphereOccluder { count, ..default() }
@@ -182,18 +182,6 @@ fn an_occluder_outside_the_view_darkens_the_floor_beside_it() {
     );
     assert!(error(&with_spheres.visibility) < 0.5 * error(&near_only.visibility));
     assert!(error(&with_spheres.visibility) < 0.5 * error(&bevy.visibility));
-}
-
-/// Mean occlusion of the columns `columns` of a visibility image.
-fn band(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
-    let (mut sum, mut n) = (0.0, 0.0);
-    for y in 0..HEIGHT {
-        for x in columns.clone() {
-            sum += 1.0 - visibility[(y * WIDTH + x) as usize];
-            n += 1.0;
-        }
-    }
-    sum / n
 }
 
 #[test]
