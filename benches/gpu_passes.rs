@@ -40,6 +40,9 @@ enum Config {
     Spheres(u32),
     /// AO fields alone, from this many occluders.
     Fields(u32),
+    /// AO fields alone, from 16 balls of the same size tessellated into about this many
+    /// triangles: the cost should not depend on it.
+    FieldBalls(u32),
 }
 
 impl Config {
@@ -50,6 +53,9 @@ impl Config {
             Config::Preset(preset) => format!("preset {}", preset.name()),
             Config::Spheres(count) => format!("far field, {count} spheres"),
             Config::Fields(count) => format!("AO fields, {count} occluders"),
+            Config::FieldBalls(triangles) => {
+                format!("AO fields, 16 balls of {triangles} triangles")
+            }
         }
     }
 }
@@ -87,6 +93,8 @@ fn main() {
         Config::Fields(1),
         Config::Fields(16),
         Config::Fields(256),
+        Config::FieldBalls(20),
+        Config::FieldBalls(10_000),
     ];
     let only: Option<Vec<String>> = args
         .iter()
@@ -259,7 +267,7 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 ..default()
             });
         }
-        Config::Fields(_) => {
+        Config::Fields(_) | Config::FieldBalls(_) => {
             camera.insert(DynamicAo {
                 technique: AoTechnique::Off,
                 spheres: false,
@@ -314,11 +322,24 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
             ));
         }
     }
-    if let Config::Fields(count) = config {
+    let field_occluders = match config {
         // Toaster-sized boxes on a grid over the floor, one baked field shared by all.
-        let toaster = world
-            .resource_mut::<Assets<Mesh>>()
-            .add(Cuboid::new(0.3, 0.2, 0.17));
+        Config::Fields(count) => Some((*count, Mesh::from(Cuboid::new(0.3, 0.2, 0.17)))),
+        // Balls with the same bounding box (so the same grid): an icosahedron, whose vertices
+        // reach 0.8507 of its radius along the axes, or a fine UV sphere.
+        Config::FieldBalls(triangles) if *triangles <= 20 => Some((
+            16,
+            Sphere::new(0.12 / 0.8507)
+                .mesh()
+                .ico(0)
+                .expect("an icosahedron"),
+        )),
+        Config::FieldBalls(_) => Some((16, Sphere::new(0.12).mesh().uv(100, 50))),
+        _ => None,
+    };
+    if let Some((count, mesh)) = field_occluders {
+        let count = &count;
+        let toaster = world.resource_mut::<Assets<Mesh>>().add(mesh);
         let side = (*count as f32).sqrt().ceil() as u32;
         for i in 0..*count {
             let (u, v) = ((i % side) as f32, (i / side) as f32);
