@@ -128,7 +128,12 @@ pub fn example_app(title: &str, args: &ExampleArgs) -> App {
             headless_plugins(),
             ScheduleRunnerPlugin::run_loop(Duration::ZERO),
         ));
-        app.insert_resource(HeadlessRun {
+        // Each frame advances time by 1/30 s, so a headless capture of frame N shows the moment
+        // N / 30 s on every machine, however slowly it renders.
+        app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+            Duration::from_secs_f64(1.0 / 30.0),
+        ))
+        .insert_resource(HeadlessRun {
             frames: args.frames,
             out: args.out.clone().unwrap_or_else(|| PathBuf::from("out.png")),
             size: UVec2::new(args.width, args.height),
