@@ -6,7 +6,8 @@ use bevy::ecs::prelude::*;
 use bevy::log::{error, warn};
 use bevy::mesh::{Mesh, Mesh3d, MeshVertexBufferLayoutRef, PrimitiveTopology};
 use bevy::pbr::{
-    MeshPipeline, MeshPipelineKey, RenderMeshInstanceFlags, RenderMeshInstances, ViewKeyCache,
+    MeshPipeline, MeshPipelineKey, RenderMaterialInstances, RenderMeshInstanceFlags,
+    RenderMeshInstances, ViewKeyCache,
 };
 use bevy::platform::collections::HashSet;
 use bevy::render::{
@@ -93,6 +94,7 @@ pub(crate) fn queue_back_faces(
     view_key_cache: Res<ViewKeyCache>,
     mut phases: ResMut<ViewSortedRenderPhases<BackFace3d>>,
     views: Query<(&ExtractedView, &RenderVisibleEntities, &DynamicAoView)>,
+    materials: Res<RenderMaterialInstances>,
     mut warned: Local<HashSet<AssetId<Mesh>>>,
 ) {
     let draw_function = draw_functions.read().id::<DrawBackFaces>();
@@ -111,6 +113,11 @@ pub(crate) fn queue_back_faces(
             continue;
         };
         for (render_entity, main_entity) in visible.iter_visible() {
+            // Bevy's prepass, the front layer, draws only meshes with a material; so does the
+            // back layer.
+            if !materials.instances.contains_key(main_entity) {
+                continue;
+            }
             let Some(instance) = render_mesh_instances.render_mesh_queue_data(*main_entity) else {
                 continue;
             };

@@ -89,3 +89,22 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
         );
     }
 }
+
+/// Bevy's prepass draws only meshes with a material, so the back layer skips the others too:
+/// a box without a material in front of an empty background leaves both layers empty.
+#[test]
+fn meshes_without_a_material_are_in_neither_layer() {
+    let mut gpu = Gpu::new(
+        &SceneSpec::new(Transform::from_xyz(0.0, 0.0, 3.0).looking_at(Vec3::ZERO, Vec3::Y)),
+        DynamicAo::default(),
+    );
+    let world = gpu.app.world_mut();
+    let cube = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(1.0, 1.0, 1.0));
+    world.spawn((Mesh3d(cube), Transform::IDENTITY));
+    let frame = gpu.frame(4);
+    let front = frame.nd.front.iter().filter(|t| t.depth > 0.0).count();
+    let back = frame.nd.back.iter().filter(|t| t.depth > 0.0).count();
+    assert_eq!((front, back), (0, 0), "front {front}, back {back} pixels");
+}
