@@ -211,6 +211,21 @@ fn exit_on_escape(keys: Res<ButtonInput<KeyCode>>, mut exit: MessageWriter<AppEx
     }
 }
 
+/// The value of an example's own numeric flag `flag` (the next argument), at least `min`;
+/// prints `usage` and exits with status 2 when it is missing or not a number.
+pub fn numeric_flag<'a>(
+    rest: &mut impl Iterator<Item = &'a String>,
+    flag: &str,
+    min: u32,
+    usage: &str,
+) -> u32 {
+    let value = rest.next().map(String::as_str).unwrap_or("");
+    parse_number(flag, value, min).unwrap_or_else(|message| {
+        eprintln!("error: {message}\n{usage}");
+        std::process::exit(2);
+    })
+}
+
 /// An asset the example cannot run without, and where it comes from.
 #[derive(Resource)]
 pub struct RequiredAsset {

@@ -36,14 +36,8 @@ fn main() {
             "--show-spheres" => options.show_spheres = true,
             "--debug-view" => options.debug_view = true,
             "--characters" => {
-                let value = rest.next().map(String::as_str).unwrap_or("");
-                match common::parse_number("--characters", value, 1u32) {
-                    Ok(n) => options.characters = n.min(200),
-                    Err(message) => {
-                        eprintln!("error: {message}\n{USAGE}");
-                        std::process::exit(2);
-                    }
-                }
+                options.characters =
+                    common::numeric_flag(&mut rest, "--characters", 1, USAGE).min(200);
             }
             unknown => {
                 eprintln!("error: unknown argument '{unknown}'\n{USAGE}");

@@ -41,14 +41,7 @@ fn main() {
         match flag.as_str() {
             "--debug-view" => options.debug_view = true,
             "--stress" => {
-                let value = rest.next().map(String::as_str).unwrap_or("");
-                match common::parse_number("--stress", value, 0u32) {
-                    Ok(n) => options.stress = n.min(4096),
-                    Err(message) => {
-                        eprintln!("error: {message}\n{USAGE}");
-                        std::process::exit(2);
-                    }
-                }
+                options.stress = common::numeric_flag(&mut rest, "--stress", 0, USAGE).min(4096);
             }
             unknown => {
                 eprintln!("error: unknown argument '{unknown}'\n{USAGE}");

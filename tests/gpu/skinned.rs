@@ -66,6 +66,16 @@ fn column() -> Mesh {
     .with_inserted_indices(Indices::U32(indices))
 }
 
+/// The inverse bind poses of the column's two joints: the root, and the elbow halfway up.
+fn column_bindposes(world: &mut World) -> Handle<SkinnedMeshInverseBindposes> {
+    world
+        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
+        .add(vec![
+            Mat4::IDENTITY,
+            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
+        ])
+}
+
 fn camera() -> Transform {
     Transform::from_xyz(0.0, 0.7, 2.2).looking_at(Vec3::new(0.2, 0.65, 0.0), Vec3::Y)
 }
@@ -74,12 +84,7 @@ fn camera() -> Transform {
 fn back_layer_follows_the_skin() {
     let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
     let world = gpu.app.world_mut();
-    let bindposes = world
-        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
-        .add(vec![
-            Mat4::IDENTITY,
-            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
-        ]);
+    let bindposes = column_bindposes(world);
     let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
     let material = world
         .resource_mut::<Assets<StandardMaterial>>()
@@ -190,12 +195,7 @@ fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
 fn occluder_spheres_follow_the_skin() {
     let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
     let world = gpu.app.world_mut();
-    let bindposes = world
-        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
-        .add(vec![
-            Mat4::IDENTITY,
-            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
-        ]);
+    let bindposes = column_bindposes(world);
     let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
     let root = world.spawn(Transform::IDENTITY).id();
     let elbow = world
@@ -281,12 +281,7 @@ fn occluder_spheres_follow_the_skin() {
 fn bad_skins_fall_back() {
     let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
     let world = gpu.app.world_mut();
-    let bindposes = world
-        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
-        .add(vec![
-            Mat4::IDENTITY,
-            Mat4::from_translation(-Vec3::Y * (LENGTH / 2.0)),
-        ]);
+    let bindposes = column_bindposes(world);
     let mut unskinned = column();
     unskinned.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
     unskinned.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
