@@ -50,6 +50,7 @@ pub mod schedule;
 pub mod settings;
 pub mod spheres;
 mod view;
+pub mod voxels;
 
 use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
@@ -71,6 +72,7 @@ pub mod prelude {
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;
     pub use crate::spheres::{OccluderSpheres, SphereOccluder};
+    pub use crate::voxels::{ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff};
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
@@ -97,6 +99,7 @@ impl Plugin for DynamicAoPlugin {
                 ray_march::RayMarchPlugin,
                 spheres::SphereOccluderPlugin,
                 fields::AoFieldPlugin,
+                voxels::VoxelAoPlugin,
                 image_space::ImageSpacePlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,

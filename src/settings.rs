@@ -63,6 +63,11 @@ pub struct DynamicAo {
     pub fields: bool,
     /// How AO fields shade a receiver. Default: [`FieldShading::Cone`].
     pub field_shading: FieldShading,
+    /// Add the occlusion sampled in the grids of every
+    /// [`VoxelAoVolume`](crate::voxels::VoxelAoVolume) (Reinbothe et al. 2009), revoxelized every
+    /// frame, so hidden, off-screen and deforming geometry inside a volume darkens what it
+    /// surrounds; it joins the far field. Not with [`AoTechnique::BevySsao`]. Default: `true`.
+    pub voxels: bool,
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
@@ -83,6 +88,7 @@ impl Default for DynamicAo {
             far_field_blend: FarFieldBlend::Add,
             fields: true,
             field_shading: FieldShading::Cone,
+            voxels: true,
             debug_view: false,
         }
     }

@@ -23,6 +23,7 @@ use bevy::render::{
 use crate::fields::ActiveAoField;
 use crate::settings::{AoTechnique, DynamicAo};
 use crate::spheres::OccluderSpheres;
+use crate::voxels::VoxelGridInfo;
 
 /// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.
 pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
@@ -151,6 +152,10 @@ pub(crate) struct DynamicAoView {
     /// AO field occluders take part.
     pub fields: bool,
     pub field_shading: crate::settings::FieldShading,
+    /// Voxel volumes take part.
+    pub voxels: bool,
+    /// The voxel occlusion is blurred after upsampling.
+    pub voxel_blur: bool,
     pub debug_view: bool,
 }
 
@@ -196,6 +201,8 @@ pub(crate) struct DynamicAoUniform {
     pub far_field_blend: u32,
     /// 1 when AO field occluders take part.
     pub fields: u32,
+    /// 1 when voxel volumes take part.
+    pub voxels: u32,
 }
 
 fn extract_views(
@@ -214,10 +221,12 @@ fn extract_views(
     >,
     sphere_occluders: Extract<Query<(), With<OccluderSpheres>>>,
     field_occluders: Extract<Query<(), With<ActiveAoField>>>,
+    voxel_volumes: Extract<Query<(), With<VoxelGridInfo>>>,
 ) {
     // Without occluders of a kind its pass, buffer clear and compose read are skipped.
     let any_spheres = !sphere_occluders.is_empty();
     let any_fields = !field_occluders.is_empty();
+    let any_volumes = !voxel_volumes.is_empty();
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
         if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
@@ -234,6 +243,7 @@ fn extract_views(
         // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
         let far_field = ao.spheres && any_spheres && ao.technique != AoTechnique::BevySsao;
         let fields = ao.fields && any_fields && ao.technique != AoTechnique::BevySsao;
+        let voxels = ao.voxels && any_volumes && ao.technique != AoTechnique::BevySsao;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
@@ -244,6 +254,8 @@ fn extract_views(
                 far_field,
                 fields,
                 field_shading: ao.field_shading,
+                voxels,
+                voxel_blur: voxels && blur.radius > 0,
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
@@ -268,6 +280,7 @@ fn extract_views(
                 far_field: u32::from(far_field),
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),
+                voxels: u32::from(voxels),
             },
         ));
     }
@@ -289,6 +302,10 @@ pub(crate) struct DynamicAoTextures {
     pub far_occlusion: CachedTexture,
     /// Product of the AO field occluders' visibilities, full size.
     pub field_visibility: CachedTexture,
+    /// Voxel occlusion as sampled (half size), and upsampled and filtered (full size); only
+    /// while voxel volumes take part.
+    pub voxel_low: Option<CachedTexture>,
+    pub voxel_occlusion: Option<CachedTexture>,
 }
 
 fn prepare_view_textures(
@@ -338,6 +355,25 @@ fn prepare_view_textures(
         } else {
             near_occlusion.clone()
         };
+        let half = ((size + 1) / 2).to_extents();
+        let (voxel_low, voxel_occlusion) = if view.voxels {
+            (
+                Some(texture(
+                    "dynamic_ao_voxel_low",
+                    half,
+                    OCCLUSION_FORMAT,
+                    storage,
+                )),
+                Some(texture(
+                    "dynamic_ao_voxel_occlusion",
+                    full,
+                    OCCLUSION_FORMAT,
+                    storage,
+                )),
+            )
+        } else {
+            (None, None)
+        };
         commands.entity(entity).insert(DynamicAoTextures {
             back_depth: texture("dynamic_ao_back_depth", full, DEPTH_FORMAT, attachment),
             back_normal: texture("dynamic_ao_back_normal", full, NORMAL_FORMAT, attachment),
@@ -356,6 +392,8 @@ fn prepare_view_textures(
                 FAR_OCCLUSION_FORMAT,
                 attachment,
             ),
+            voxel_low,
+            voxel_occlusion,
         });
     }
 }

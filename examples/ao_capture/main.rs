@@ -8,9 +8,11 @@
 //!     [--out-color COLOR.png]
 //! ```
 //!
-//! `--technique list` prints the technique names: the image-space ones, `spheres` (the far field
-//! of sphere occluders alone, with a `SphereOccluder` on the scene root so every mesh casts it)
-//! and each image-space one with `+spheres` added. Bevy's own SSAO (`bevy-ssao`) has a radius
+//! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
+//! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
+//! baked for every mesh; `voxels`: one `VoxelAoVolume` around the scene's bounds grown by the
+//! radius, with d_max the radius) and each image-space one with `+spheres`, `+fields` or
+//! `+voxels` added. Bevy's own SSAO (`bevy-ssao`) has a radius
 //! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
 
 #[path = "../common/mod.rs"]
@@ -22,7 +24,7 @@ use std::time::Duration;
 
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState};
-use bevy::camera::RenderTarget;
+use bevy::camera::{RenderTarget, primitives::Aabb};
 use bevy::gltf::{Gltf, GltfAssetLabel};
 use bevy::prelude::*;
 use bevy::render::{
@@ -34,7 +36,7 @@ use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
 use bevy_dynamic_ao::fields::ActiveAoField;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
-use options::Options;
+use options::{FarTerm, Options};
 
 /// Frames a scene may take to load before the run gives up.
 const LOAD_TIMEOUT_FRAMES: u32 = 2000;
@@ -80,9 +82,10 @@ fn main() {
         visibility: None,
         color_done: false,
         failure: None,
+        volume: None,
     })
     .add_systems(Startup, load_scene)
-    .add_systems(Update, drive);
+    .add_systems(Update, (place_volume, drive).chain());
     let exit = app.run();
     if let AppExit::Error(_) = exit {
         std::process::exit(1);
@@ -109,6 +112,8 @@ struct Capture {
     visibility: Option<Vec<f32>>,
     color_done: bool,
     failure: Option<String>,
+    /// The voxel volume of `--technique voxels`, once the scene's bounds are known.
+    volume: Option<Entity>,
 }
 
 fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
@@ -176,14 +181,15 @@ fn scene_ready(
                 ..default()
             },
             half_resolution: options.half_resolution,
-            spheres: options.spheres,
-            fields: options.fields,
+            spheres: options.far == Some(FarTerm::Spheres),
+            fields: options.far == Some(FarTerm::Fields),
+            voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
             ..default()
         },
         readback.clone(),
     ));
-    if options.fields {
+    if options.far == Some(FarTerm::Fields) {
         // Baked on load (or read from the disk cache) for every mesh, in its own space.
         for entity in children.iter_descendants(ready.entity) {
             if meshes.contains(entity) {
@@ -191,7 +197,7 @@ fn scene_ready(
             }
         }
     }
-    if options.spheres {
+    if options.far == Some(FarTerm::Spheres) {
         // On the root, so every mesh of the scene casts far-field occlusion.
         commands
             .entity(ready.entity)
@@ -221,6 +227,64 @@ fn scene_ready(
     capture.stage = Stage::Rendering { until };
 }
 
+/// `--technique voxels`: one volume around every mesh of the scene, grown by the radius so
+/// occluders at its rim still reach the surfaces inside, with d_max the radius.
+fn place_volume(
+    mut commands: Commands,
+    mut capture: ResMut<Capture>,
+    children: Query<&Children>,
+    meshes: Query<(Option<&Aabb>, &GlobalTransform), With<Mesh3d>>,
+) {
+    let (Stage::Rendering { .. }, Some(FarTerm::Voxels), None, Some(root)) = (
+        capture.stage,
+        capture.options.far,
+        capture.volume,
+        capture.root,
+    ) else {
+        return;
+    };
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for entity in children.iter_descendants(root) {
+        let Ok((aabb, transform)) = meshes.get(entity) else {
+            continue;
+        };
+        let Some(aabb) = aabb else {
+            return;
+        };
+        for corner in 0..8 {
+            let pick = |bit: u32, axis: usize| {
+                if corner & bit == 0 {
+                    aabb.min()[axis]
+                } else {
+                    aabb.max()[axis]
+                }
+            };
+            let p = transform.transform_point(Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2)));
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        return;
+    }
+    let radius = capture.options.radius;
+    let volume = commands
+        .spawn((
+            Transform::from_translation((lo + hi) / 2.0),
+            VoxelAoVolume {
+                half_extents: (hi - lo) / 2.0 + radius,
+                d_max: radius,
+                ..default()
+            },
+        ))
+        .id();
+    capture.volume = Some(volume);
+    // The frames to render start now that the volume exists.
+    capture.stage = Stage::Rendering {
+        until: capture.frames + capture.options.frames,
+    };
+}
+
 fn drive(
     mut commands: Commands,
     mut capture: ResMut<Capture>,
@@ -247,6 +311,15 @@ fn drive(
                     "ao_capture: {} did not load in time",
                     capture.options.scene.display()
                 );
+                exit.write(AppExit::error());
+            }
+        }
+        Stage::Rendering { .. }
+            if capture.options.far == Some(FarTerm::Voxels) && capture.volume.is_none() =>
+        {
+            // Mesh bounds appear a frame after the scene spawns.
+            if capture.frames > LOAD_TIMEOUT_FRAMES {
+                eprintln!("ao_capture: the scene's bounds never became known");
                 exit.write(AppExit::error());
             }
         }

@@ -14,10 +14,33 @@ pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
 const MAX_SIZE: u32 = 8192;
 
-/// Names of the far-field terms: alone they are the whole occlusion, after `+` they join an
-/// image-space technique.
-const SPHERES: &str = "spheres";
-const FIELDS: &str = "fields";
+/// The far-field terms: alone they are the whole occlusion, after `+` they join an image-space
+/// technique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FarTerm {
+    /// Spheres on every mesh of the scene.
+    Spheres,
+    /// An AO field baked for every mesh of the scene.
+    Fields,
+    /// One voxel volume around the whole scene, grown by the radius.
+    Voxels,
+}
+
+impl FarTerm {
+    const ALL: [Self; 3] = [Self::Spheres, Self::Fields, Self::Voxels];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Spheres => "spheres",
+            Self::Fields => "fields",
+            Self::Voxels => "voxels",
+        }
+    }
+
+    fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|term| term.name() == name)
+    }
+}
 
 /// Every name `--technique` takes: the plugin's techniques, each far-field term alone, and each
 /// image-space technique with a far-field term added.
@@ -26,22 +49,19 @@ pub fn technique_names() -> Vec<String> {
         .iter()
         .map(|(n, _)| n.to_string())
         .collect();
-    names.extend([SPHERES.into(), FIELDS.into()]);
+    names.extend(FarTerm::ALL.map(|term| term.name().to_string()));
     for (name, technique) in AoTechnique::ALL {
         if !matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) {
-            names.push(format!("{name}+{SPHERES}"));
-            names.push(format!("{name}+{FIELDS}"));
+            names.extend(FarTerm::ALL.map(|term| format!("{name}+{}", term.name())));
         }
     }
     names
 }
 
-/// What a technique name asks for: the image-space technique, spheres, fields.
-fn parse_technique(name: &str) -> Option<(AoTechnique, bool, bool)> {
-    match name {
-        SPHERES => return Some((AoTechnique::Off, true, false)),
-        FIELDS => return Some((AoTechnique::Off, false, true)),
-        _ => {}
+/// What a technique name asks for: the image-space technique and the far-field term.
+fn parse_technique(name: &str) -> Option<(AoTechnique, Option<FarTerm>)> {
+    if let Some(term) = FarTerm::from_name(name) {
+        return Some((AoTechnique::Off, Some(term)));
     }
     let (base, far) = match name.split_once('+') {
         Some((base, far)) => (base, Some(far)),
@@ -49,11 +69,9 @@ fn parse_technique(name: &str) -> Option<(AoTechnique, bool, bool)> {
     };
     let technique = AoTechnique::from_name(base)?;
     match far {
-        None => Some((technique, false, false)),
+        None => Some((technique, None)),
         Some(_) if matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) => None,
-        Some(SPHERES) => Some((technique, true, false)),
-        Some(FIELDS) => Some((technique, false, true)),
-        Some(_) => None,
+        Some(far) => Some((technique, Some(FarTerm::from_name(far)?))),
     }
 }
 
@@ -66,10 +84,8 @@ pub struct Options {
     /// World-space AO radius, metres.
     pub radius: f32,
     pub technique: AoTechnique,
-    /// Far-field occlusion from spheres on every mesh of the scene.
-    pub spheres: bool,
-    /// Far-field occlusion from an AO field baked for every mesh of the scene.
-    pub fields: bool,
+    /// The far-field term, if any.
+    pub far: Option<FarTerm>,
     /// How the far-field term joins the image-space one.
     pub far_blend: FarFieldBlend,
     pub preset: AoQuality,
@@ -88,11 +104,7 @@ pub struct Options {
 impl Options {
     /// The technique as `--technique` names it.
     pub fn technique_name(&self) -> String {
-        let far = match (self.spheres, self.fields) {
-            (true, _) => Some(SPHERES),
-            (_, true) => Some(FIELDS),
-            _ => None,
-        };
+        let far = self.far.map(FarTerm::name);
         match (self.technique, far) {
             (AoTechnique::Off, Some(far)) => far.into(),
             (technique, Some(far)) => format!("{}+{far}", technique.name()),
@@ -201,10 +213,9 @@ impl Options {
             height: height.ok_or_else(|| missing("--height"))?,
             radius: radius.ok_or_else(|| missing("--radius"))?,
             technique: technique
-                .map(|(t, _, _)| t)
+                .map(|(t, _)| t)
                 .ok_or_else(|| missing("--technique"))?,
-            spheres: technique.is_some_and(|(_, spheres, _)| spheres),
-            fields: technique.is_some_and(|(_, _, fields)| fields),
+            far: technique.and_then(|(_, far)| far),
             far_blend,
             preset,
             blur,

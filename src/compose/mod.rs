@@ -10,7 +10,7 @@
 //! The debug view draws the same visibility over the lit image, full screen.
 
 mod debug_view;
-mod node;
+pub(crate) mod node;
 mod pipeline;
 
 use bevy::app::{App, Plugin};
@@ -30,6 +30,7 @@ use crate::schedule::DynamicAoSystems;
 use crate::settings::{AoTechnique, FieldShading};
 use crate::spheres::SplatPipeline;
 use crate::view::DynamicAoView;
+use crate::voxels::VoxelPipelines;
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
 pub struct ComposePlugin;
@@ -90,6 +91,7 @@ fn hand_over_from_bevy_ssao(
     compose: Res<pipeline::ComposePipeline>,
     splat: Res<SplatPipeline>,
     fields: Res<FieldPipelines>,
+    voxels: Res<VoxelPipelines>,
     views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
 ) {
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
@@ -109,7 +111,19 @@ fn hand_over_from_bevy_ssao(
         };
         let fields_ready =
             !view.fields || pipeline_cache.get_render_pipeline(field_pipeline).is_some();
-        if technique && filter && far_field && fields_ready && ready(compose.pipeline) {
+        let voxels_ready = !view.voxels
+            || (ready(voxels.voxelize)
+                && ready(voxels.sample)
+                && ready(blur.upsample)
+                && ready(blur.x)
+                && ready(blur.y));
+        if technique
+            && filter
+            && far_field
+            && fields_ready
+            && voxels_ready
+            && ready(compose.pipeline)
+        {
             commands.entity(entity).insert(AoPassesReady);
             if bevy_ssao {
                 commands.entity(entity).remove::<SsaoPipelineId>();

@@ -46,6 +46,7 @@ impl FromWorld for ComposePipeline {
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_storage_2d(format, StorageTextureAccess::WriteOnly),
                 ),
             ),
@@ -98,6 +99,12 @@ pub(crate) fn prepare_compose_bind_groups(
                 &textures.full_occlusion.default_view,
                 &textures.far_occlusion.default_view,
                 &textures.field_visibility.default_view,
+                // Without voxels nothing reads this binding; any float texture of the view fits.
+                &textures
+                    .voxel_occlusion
+                    .as_ref()
+                    .unwrap_or(&textures.far_occlusion)
+                    .default_view,
                 &ssao.screen_space_ambient_occlusion_texture.default_view,
             )),
         );

@@ -18,10 +18,10 @@ use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_
 
 #[derive(Resource)]
 pub(crate) struct BlurPipelines {
-    layout: BindGroupLayoutDescriptor,
+    pub layout: BindGroupLayoutDescriptor,
     pub x: CachedComputePipelineId,
     pub y: CachedComputePipelineId,
-    upsample_layout: BindGroupLayoutDescriptor,
+    pub upsample_layout: BindGroupLayoutDescriptor,
     pub upsample: CachedComputePipelineId,
 }
 

@@ -27,3 +27,4 @@ pub mod ray_march;
 pub mod sampling;
 pub mod scene;
 pub mod spheres;
+pub mod voxels;

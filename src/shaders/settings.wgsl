@@ -35,4 +35,6 @@ struct DynamicAoSettings {
     far_field_blend: u32,
     // 1 when AO field occluders take part.
     fields: u32,
+    // 1 when voxel volumes take part.
+    voxels: u32,
 }

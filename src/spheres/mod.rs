@@ -36,6 +36,7 @@ pub use component::{OccluderSphere, OccluderSpheres, SphereOccluder, far_field_r
 #[cfg(feature = "gizmos")]
 pub use gizmos::ShowOccluderSpheres;
 pub use systems::ASYNC_CLUSTERING_VERTICES;
+pub(crate) use systems::{mesh_morph_weights, skin_joints};
 
 pub(crate) use splat::SplatPipeline;
 

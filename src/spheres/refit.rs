@@ -36,9 +36,8 @@ pub fn refit(
 ) -> usize {
     out.clear();
     let skin = mesh.skin.as_deref().filter(|_| !pose.joints.is_empty());
-    let morphing = mesh.morph_targets > 0 && pose.morph_weights.iter().any(|w| *w != 0.0);
     let mut dropped = 0;
-    if skin.is_none() && !morphing {
+    if Deformer::is_rigid(mesh, pose) {
         // A rigid mesh: its spheres move with it and no vertex needs touching.
         let scale = max_axis_scale(pose.world_from_mesh.matrix3);
         for s in &clustered.spheres {
@@ -52,38 +51,8 @@ pub fn refit(
         return dropped;
     }
 
-    let morph_weights: Vec<(usize, f32)> = pose
-        .morph_weights
-        .iter()
-        .take(mesh.morph_targets)
-        .copied()
-        .enumerate()
-        .filter(|(_, w)| *w != 0.0)
-        .collect();
-    let vertex_count = mesh.positions.len();
-    let deform = |v: usize| -> Vec3A {
-        let mut p = Vec3A::from(mesh.positions[v]);
-        for &(target, weight) in &morph_weights {
-            p += Vec3A::from(mesh.morph_positions[target * vertex_count + v]) * weight;
-        }
-        match skin {
-            Some(skin) => {
-                let s = &skin[v];
-                let mut q = Vec3A::ZERO;
-                for k in 0..4 {
-                    if s.weights[k] > 0.0 {
-                        let joint = pose
-                            .joints
-                            .get(s.joints[k] as usize)
-                            .unwrap_or(&Affine3A::IDENTITY);
-                        q += joint.transform_point3a(p) * s.weights[k];
-                    }
-                }
-                q
-            }
-            None => pose.world_from_mesh.transform_point3a(p),
-        }
-    };
+    let deformer = Deformer::new(mesh, pose);
+    let deform = |v: usize| deformer.point(v);
 
     for (i, rest) in clustered.spheres.iter().enumerate() {
         let (start, end) = clustered.ranges[i];
@@ -125,6 +94,70 @@ pub fn refit(
         push_finite(out, &mut dropped, center, radius);
     }
     dropped
+}
+
+/// Deforms the vertices of a rest mesh into world space for one pose: morph targets first, then
+/// linear blend skinning, as Bevy's vertex shader does.
+pub struct Deformer<'a> {
+    mesh: &'a RestMesh,
+    pose: &'a Pose<'a>,
+    skin: Option<&'a [super::rest_mesh::VertexSkin]>,
+    morph_weights: Vec<(usize, f32)>,
+}
+
+impl<'a> Deformer<'a> {
+    /// Prepares the deformation of `mesh` in `pose`.
+    pub fn new(mesh: &'a RestMesh, pose: &'a Pose<'a>) -> Self {
+        Self {
+            mesh,
+            pose,
+            skin: mesh.skin.as_deref().filter(|_| !pose.joints.is_empty()),
+            morph_weights: pose
+                .morph_weights
+                .iter()
+                .take(mesh.morph_targets)
+                .copied()
+                .enumerate()
+                .filter(|(_, w)| *w != 0.0)
+                .collect(),
+        }
+    }
+
+    /// Whether `pose` moves `mesh` as a rigid body (no skin, no active morph target), so its
+    /// world-space vertices are `world_from_mesh` applied to the rest positions.
+    pub fn is_rigid(mesh: &RestMesh, pose: &Pose) -> bool {
+        let skinned = mesh.skin.is_some() && !pose.joints.is_empty();
+        let morphing = mesh.morph_targets > 0 && pose.morph_weights.iter().any(|w| *w != 0.0);
+        !skinned && !morphing
+    }
+
+    /// World-space position of vertex `v`.
+    pub fn point(&self, v: usize) -> Vec3A {
+        let mesh = self.mesh;
+        let mut p = Vec3A::from(mesh.positions[v]);
+        let vertex_count = mesh.positions.len();
+        for &(target, weight) in &self.morph_weights {
+            p += Vec3A::from(mesh.morph_positions[target * vertex_count + v]) * weight;
+        }
+        match self.skin {
+            Some(skin) => {
+                let s = &skin[v];
+                let mut q = Vec3A::ZERO;
+                for k in 0..4 {
+                    if s.weights[k] > 0.0 {
+                        let joint = self
+                            .pose
+                            .joints
+                            .get(s.joints[k] as usize)
+                            .unwrap_or(&Affine3A::IDENTITY);
+                        q += joint.transform_point3a(p) * s.weights[k];
+                    }
+                }
+                q
+            }
+            None => self.pose.world_from_mesh.transform_point3a(p),
+        }
+    }
 }
 
 fn push_finite(out: &mut Vec<OccluderSphere>, dropped: &mut usize, center: Vec3, radius: f32) {

@@ -208,29 +208,15 @@ pub(crate) fn refit_spheres(
                          transform"
                             .to_string()
                     });
-                } else if let Some(bindposes) = inverse_bindposes.get(&skinned.inverse_bindposes) {
-                    for (i, joint) in skinned.joints.iter().enumerate() {
-                        let world = transforms.get(*joint).map(|t| t.affine());
-                        if world.is_err() {
-                            warn_once(Problem::MissingJoint, &|| {
-                                "has a joint entity that does not exist; that joint counts as \
-                                 the identity"
-                                    .to_string()
-                            });
-                        }
-                        let bindpose = bindposes.get(i).copied().unwrap_or_default();
-                        joints.push(world.unwrap_or_default() * Affine3A::from_mat4(bindpose));
-                    }
+                } else if !skin_joints(skinned, &inverse_bindposes, &transforms, &mut joints) {
+                    warn_once(Problem::MissingJoint, &|| {
+                        "has a joint entity that does not exist; that joint counts as the \
+                         identity"
+                            .to_string()
+                    });
                 }
             }
-            let weights: &[f32] = match morphs {
-                Some(MeshMorphWeights::Value { weights }) => weights,
-                Some(MeshMorphWeights::Reference(owner)) => morph_weights
-                    .get(*owner)
-                    .map(|w| w.weights())
-                    .unwrap_or_default(),
-                None => &[],
-            };
+            let weights = mesh_morph_weights(morphs, &morph_weights);
             let pose = Pose {
                 world_from_mesh: transform.affine(),
                 joints: &joints,
@@ -252,5 +238,42 @@ pub(crate) fn refit_spheres(
                 commands.entity(entity).insert(out);
             }
         }
+    }
+}
+
+/// Fills `out` with the skinning matrices of `skinned` (each joint's world transform × its
+/// inverse bind pose), as Bevy's skinning uses them. Returns false when a joint entity is
+/// missing (it counts as the identity). Leaves `out` empty while the bind poses are loading.
+pub(crate) fn skin_joints(
+    skinned: &SkinnedMesh,
+    inverse_bindposes: &Assets<SkinnedMeshInverseBindposes>,
+    transforms: &Query<&GlobalTransform>,
+    out: &mut Vec<Affine3A>,
+) -> bool {
+    out.clear();
+    let Some(bindposes) = inverse_bindposes.get(&skinned.inverse_bindposes) else {
+        return true;
+    };
+    let mut all_found = true;
+    for (i, joint) in skinned.joints.iter().enumerate() {
+        let world = transforms.get(*joint).map(|t| t.affine());
+        all_found &= world.is_ok();
+        let bindpose = bindposes.get(i).copied().unwrap_or_default();
+        out.push(world.unwrap_or_default() * Affine3A::from_mat4(bindpose));
+    }
+    all_found
+}
+
+/// The morph target weights a mesh is drawn with this frame.
+pub(crate) fn mesh_morph_weights<'a>(
+    morphs: Option<&'a MeshMorphWeights>,
+    owners: &'a Query<&MorphWeights>,
+) -> &'a [f32] {
+    match morphs {
+        Some(MeshMorphWeights::Value { weights }) => weights,
+        Some(MeshMorphWeights::Reference(owner)) => {
+            owners.get(*owner).map(|w| w.weights()).unwrap_or_default()
+        }
+        None => &[],
     }
 }

@@ -27,3 +27,4 @@ mod scenes;
 mod shared_assets;
 mod skinned;
 mod spheres;
+mod voxels;

@@ -12,12 +12,12 @@ use bevy_dynamic_ao::prelude::*;
 
 use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
 
-const HALF: f32 = 0.15;
-const LENGTH: f32 = 1.2;
+pub(crate) const HALF: f32 = 0.15;
+pub(crate) const LENGTH: f32 = 1.2;
 const RINGS: usize = 12;
 
 /// A square column along +Y; vertices above half its length belong to the second joint.
-fn column() -> Mesh {
+pub(crate) fn column() -> Mesh {
     let (mut positions, mut normals, mut joints, mut weights, mut indices) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut vertex = |p: Vec3, n: Vec3, positions: &mut Vec<[f32; 3]>| {
@@ -67,7 +67,7 @@ fn column() -> Mesh {
 }
 
 /// The inverse bind poses of the column's two joints: the root, and the elbow halfway up.
-fn column_bindposes(world: &mut World) -> Handle<SkinnedMeshInverseBindposes> {
+pub(crate) fn column_bindposes(world: &mut World) -> Handle<SkinnedMeshInverseBindposes> {
     world
         .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
         .add(vec![

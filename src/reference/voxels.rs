@@ -1,0 +1,470 @@
+//! Voxel volumes on the CPU: triangle–cell voxelization by brute force over each triangle's
+//! bounding box, and the AO sampling of `voxels/voxel_ao.wgsl`, step for step with the same
+//! hashes, so the GPU passes can be checked against them.
+
+use bevy::math::{Affine3A, Mat3, Vec2, Vec3};
+use bevy::platform::collections::HashMap;
+
+use super::filter::wendland;
+use super::nd_buffer::{NdBuffer, ViewMatrices};
+use super::sampling::pcg_hash;
+use super::scene::Triangle;
+use crate::voxels::{VoxelFalloff, VoxelRays};
+
+/// A bit grid of `resolution`³ cells; cell (x, y, z) is bit `i % 32` of word `i / 32`,
+/// `i = x + resolution · (y + resolution · z)`, in two layers: the surface cells triangles touch,
+/// and the interior cells of closed meshes. A cell is occupied when either bit is set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelGrid {
+    /// Cells per axis.
+    pub resolution: u32,
+    /// World space → grid space; cell (x, y, z) spans [x, x + 1]³.
+    pub grid_from_world: Affine3A,
+    /// Surface bits.
+    pub words: Vec<u32>,
+    /// Interior bits (parity of the closed surfaces below each cell centre).
+    pub solid: Vec<u32>,
+}
+
+impl VoxelGrid {
+    /// An empty grid.
+    pub fn new(resolution: u32, grid_from_world: Affine3A) -> Self {
+        Self {
+            resolution,
+            grid_from_world,
+            words: vec![0; crate::voxels::VoxelGridInfo::words_for(resolution) as usize],
+            solid: vec![0; crate::voxels::VoxelGridInfo::words_for(resolution) as usize],
+        }
+    }
+
+    fn index(&self, cell: [i32; 3]) -> Option<usize> {
+        let n = self.resolution as i32;
+        if cell.iter().any(|&c| c < 0 || c >= n) {
+            return None;
+        }
+        Some((cell[0] + n * (cell[1] + n * cell[2])) as usize)
+    }
+
+    /// Whether cell `cell` is occupied (false outside the grid).
+    pub fn occupied(&self, cell: [i32; 3]) -> bool {
+        self.index(cell)
+            .is_some_and(|i| (self.words[i / 32] | self.solid[i / 32]) & (1 << (i % 32)) != 0)
+    }
+
+    fn set(&mut self, cell: [i32; 3]) {
+        if let Some(i) = self.index(cell) {
+            self.words[i / 32] |= 1 << (i % 32);
+        }
+    }
+
+    /// Whether the cell holding world point `p` is occupied.
+    pub fn occupied_at(&self, p: Vec3) -> bool {
+        let g = self.grid_from_world.transform_point3(p).floor();
+        self.occupied([g.x as i32, g.y as i32, g.z as i32])
+    }
+
+    /// Occupied cells.
+    pub fn count(&self) -> u32 {
+        self.words
+            .iter()
+            .zip(&self.solid)
+            .map(|(w, s)| (w | s).count_ones())
+            .sum()
+    }
+
+    /// Fills the interior of closed `triangles` (world space): every triangle flips the interior
+    /// bit of every cell whose centre lies above it along the grid's z axis, so a cell ends up set
+    /// when an odd number of surfaces lie below it. Shared edges and vertices count once, by the
+    /// top-left rule on edge values computed the same way for both triangles that share an edge.
+    pub fn fill_closed(&mut self, triangles: &[Triangle]) {
+        let n = self.resolution as i32;
+        for t in triangles {
+            let [a, b, c] = t.vertices.map(|p| self.grid_from_world.transform_point3(p));
+            let Some(triangle) = ClosedTriangle::new(a, b, c, n) else {
+                continue;
+            };
+            let (lo, hi) = triangle.columns;
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let Some(first) = triangle.first_cell_above(x, y) else {
+                        continue;
+                    };
+                    for z in first..n {
+                        let i = (x + n * (y + n * z)) as usize;
+                        self.solid[i / 32] ^= 1 << (i % 32);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Whether a triangle soup encloses a volume: every edge, with vertices at the same position
+/// welded (meshes split vertices along hard edges and seams), belongs to exactly two triangles.
+pub fn is_closed(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> bool {
+    let mut welded: HashMap<[u32; 3], u32> = HashMap::default();
+    let mut id = |p: Vec3| {
+        let next = welded.len() as u32;
+        *welded.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+    };
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::default();
+    for triangle in triangles {
+        let ids = triangle.map(&mut id);
+        for k in 0..3 {
+            let (a, b) = (ids[k], ids[(k + 1) % 3]);
+            if a == b {
+                return false;
+            }
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    !edges.is_empty() && edges.values().all(|&count| count == 2)
+}
+
+/// The value of the 2D edge function of (a, b) at p, computed from the lexicographically smaller
+/// end, so the two triangles that share an edge get exactly opposite values.
+pub fn edge_value(a: Vec2, b: Vec2, p: Vec2) -> f32 {
+    if a.x < b.x || (a.x == b.x && a.y < b.y) {
+        (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)
+    } else {
+        -((a.x - b.x) * (p.y - b.y) - (a.y - b.y) * (p.x - b.x))
+    }
+}
+
+/// Whether a point with edge value `e` on edge a → b of a counter-clockwise triangle belongs to
+/// it: inside, or on an edge it owns (the top-left rule).
+fn owns(e: f32, a: Vec2, b: Vec2) -> bool {
+    let d = b - a;
+    e > 0.0 || (e == 0.0 && (d.y > 0.0 || (d.y == 0.0 && d.x < 0.0)))
+}
+
+/// A closed-mesh triangle in grid space, turned counter-clockwise as seen down the z axis.
+pub struct ClosedTriangle {
+    p: [Vec3; 3],
+    area: f32,
+    /// First and last column (x, y) of its bounds, clamped to the grid.
+    pub columns: (bevy::math::IVec2, bevy::math::IVec2),
+}
+
+impl ClosedTriangle {
+    /// None for triangles edge-on to z, not finite, or outside the grid's columns or above it.
+    pub fn new(a: Vec3, b: Vec3, c: Vec3, n: i32) -> Option<Self> {
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            return None;
+        }
+        let area = edge_value(a.truncate(), b.truncate(), c.truncate());
+        if area == 0.0 {
+            return None;
+        }
+        let p = if area > 0.0 { [a, b, c] } else { [b, a, c] };
+        let lo = a.min(b.min(c)).truncate().floor().as_ivec2();
+        let hi = a.max(b.max(c)).truncate().floor().as_ivec2();
+        let lo = lo.max(bevy::math::IVec2::ZERO);
+        let hi = hi.min(bevy::math::IVec2::splat(n - 1));
+        if lo.x > hi.x || lo.y > hi.y || a.z.min(b.z.min(c.z)) >= n as f32 {
+            return None;
+        }
+        Some(Self {
+            p,
+            area: area.abs(),
+            columns: (lo, hi),
+        })
+    }
+
+    /// The first cell of column (x, y) whose centre lies above the triangle, or None when the
+    /// column's centre is not covered by it.
+    pub fn first_cell_above(&self, x: i32, y: i32) -> Option<i32> {
+        let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let [p0, p1, p2] = self.p;
+        let (v0, v1, v2) = (p0.truncate(), p1.truncate(), p2.truncate());
+        let e0 = edge_value(v1, v2, q);
+        let e1 = edge_value(v2, v0, q);
+        let e2 = edge_value(v0, v1, q);
+        if !(owns(e0, v1, v2) && owns(e1, v2, v0) && owns(e2, v0, v1)) {
+            return None;
+        }
+        let z = (e0 * p0.z + e1 * p1.z + e2 * p2.z) / self.area;
+        Some(((z - 0.5).floor() as i32 + 1).max(0))
+    }
+}
+
+/// Whether the triangle (v0, v1, v2), relative to a cell's centre, overlaps the cell [−½, ½]³:
+/// the separating-axis test of Akenine-Möller (2001), touching counts as overlapping.
+pub fn triangle_overlaps_cell(v0: Vec3, v1: Vec3, v2: Vec3) -> bool {
+    let edges = [v1 - v0, v2 - v1, v0 - v2];
+    for edge in edges {
+        for unit in [Vec3::X, Vec3::Y, Vec3::Z] {
+            let axis = unit.cross(edge);
+            let (p0, p1, p2) = (axis.dot(v0), axis.dot(v1), axis.dot(v2));
+            let r = 0.5 * (axis.x.abs() + axis.y.abs() + axis.z.abs());
+            if p0.min(p1.min(p2)) > r || p0.max(p1.max(p2)) < -r {
+                return false;
+            }
+        }
+    }
+    let lo = v0.min(v1.min(v2));
+    let hi = v0.max(v1.max(v2));
+    if lo.cmpgt(Vec3::splat(0.5)).any() || hi.cmplt(Vec3::splat(-0.5)).any() {
+        return false;
+    }
+    let normal = edges[0].cross(edges[1]);
+    let r = 0.5 * (normal.x.abs() + normal.y.abs() + normal.z.abs());
+    normal.dot(v0).abs() <= r
+}
+
+/// Voxelizes world-space `triangles` into a grid of `resolution`³ cells placed by
+/// `grid_from_world`: every cell of each triangle's bounding box is tested.
+pub fn voxelize(triangles: &[Triangle], resolution: u32, grid_from_world: Affine3A) -> VoxelGrid {
+    let mut grid = VoxelGrid::new(resolution, grid_from_world);
+    let last = resolution as i32 - 1;
+    for t in triangles {
+        let [a, b, c] = t.vertices.map(|p| grid_from_world.transform_point3(p));
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            continue;
+        }
+        let lo = a.min(b.min(c)).floor();
+        let hi = a.max(b.max(c)).floor();
+        if hi.min_element() < 0.0 || lo.max_element() > last as f32 {
+            continue;
+        }
+        let lo = lo
+            .as_ivec3()
+            .clamp(bevy::math::IVec3::ZERO, bevy::math::IVec3::splat(last));
+        let hi = hi
+            .as_ivec3()
+            .clamp(bevy::math::IVec3::ZERO, bevy::math::IVec3::splat(last));
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let centre = Vec3::new(x as f32, y as f32, z as f32) + 0.5;
+                    if triangle_overlaps_cell(a - centre, b - centre, c - centre) {
+                        grid.set([x, y, z]);
+                    }
+                }
+            }
+        }
+    }
+    grid
+}
+
+const GOLDEN_RATIO_FRACTION: f32 = 0.618_034;
+
+/// The hash of the world-space noise cell holding `p`.
+pub fn cell_hash(p: Vec3, cell: f32) -> u32 {
+    let c = (p / cell).floor();
+    pcg_hash((c.x as i32) as u32 ^ pcg_hash((c.y as i32) as u32 ^ pcg_hash((c.z as i32) as u32)))
+}
+
+fn unit_float(h: u32) -> f32 {
+    (h >> 8) as f32 / 16_777_216.0
+}
+
+/// An orthonormal frame around unit `n` (Duff et al. 2017): columns tangent, bitangent, normal.
+pub fn tangent_frame(n: Vec3) -> Mat3 {
+    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    Mat3::from_cols(
+        Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        Vec3::new(b, s + n.y * n.y * a, -n.y),
+        n,
+    )
+}
+
+/// Ray `i` of `count` around +Z: a spiral over the cone of half-angle acos(cos_spread), uniform
+/// in solid angle, shifted by the jitter (j1, j2).
+pub fn ray_direction(i: u32, count: u32, cos_spread: f32, j1: f32, j2: f32) -> Vec3 {
+    let cos_theta = 1.0 - (i as f32 + j1) / count as f32 * (1.0 - cos_spread);
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * (i as f32 * GOLDEN_RATIO_FRACTION + j2).fract();
+    Vec3::new(phi.cos() * sin_theta, phi.sin() * sin_theta, cos_theta)
+}
+
+/// Occlusion of the surface at `p` with unit normal `n` in one volume (eq. 4, normalized by the
+/// cosines): 0 = open, 1 = enclosed at distance 0.
+pub fn volume_occlusion(grid: &VoxelGrid, rays: &VoxelRays, p: Vec3, n: Vec3) -> f32 {
+    let g = grid.grid_from_world.transform_point3(p);
+    let size = Vec3::splat(grid.resolution as f32);
+    if g.cmplt(-rays.reach).any() || g.cmpgt(size + rays.reach).any() {
+        return 0.0;
+    }
+    let h = cell_hash(p, rays.noise_cell);
+    let (j1, j2, j3) = (
+        unit_float(pcg_hash(h)),
+        unit_float(pcg_hash(h.wrapping_add(1))),
+        unit_float(pcg_hash(h.wrapping_add(2))),
+    );
+    let frame = tangent_frame(n);
+    let origin = p + n * rays.bias;
+    let (mut occlusion, mut cosines) = (0.0f32, 0.0f32);
+    for i in 0..rays.rays {
+        let local = ray_direction(i, rays.rays, rays.cos_spread, j1, j2);
+        let direction = frame * local;
+        cosines += local.z;
+        for s in 0..rays.steps {
+            let t = rays.d_max * (s as f32 + j3) / rays.steps as f32;
+            if grid.occupied_at(origin + direction * t) {
+                let weight = match rays.falloff {
+                    VoxelFalloff::Wendland => wendland(t, rays.d_max),
+                    VoxelFalloff::None => 1.0,
+                };
+                occlusion += weight * local.z;
+                break;
+            }
+        }
+    }
+    if cosines > 0.0 {
+        occlusion / cosines
+    } else {
+        0.0
+    }
+}
+
+/// The half-resolution AO map of `voxels/voxel_ao.wgsl`: texel (i, j) is the largest occlusion
+/// over `volumes` at full-resolution pixel (2i, 2j); row-major, `(w + 1) / 2` × `(h + 1) / 2`.
+pub fn voxel_ao_map(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    volumes: &[(VoxelGrid, VoxelRays)],
+) -> Vec<f32> {
+    let (w, h) = (nd.width, nd.height);
+    let (lw, lh) = (w.div_ceil(2), h.div_ceil(2));
+    let mut out = vec![0.0; (lw * lh) as usize];
+    for ly in 0..lh {
+        for lx in 0..lw {
+            let (x, y) = ((lx * 2).min(w - 1) as i32, (ly * 2).min(h - 1) as i32);
+            let Some(t) = nd.texel(false, x, y).filter(|t| t.depth > 0.0) else {
+                continue;
+            };
+            let p = view.world_position(x, y, w, h, t.depth);
+            out[(ly * lw + lx) as usize] = volumes
+                .iter()
+                .map(|(grid, rays)| volume_occlusion(grid, rays, p, t.normal))
+                .fold(0.0, f32::max);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
+        Triangle {
+            vertices: [a.into(), b.into(), c.into()],
+            normals: None,
+        }
+    }
+
+    #[test]
+    fn a_triangle_in_a_grid_plane_fills_one_layer_of_cells() {
+        // The plane z = 2 in a 4³ grid over [0, 4]³ touches the cells on both sides; only the
+        // layer it lies in by its bounding box (cells [2, 3]) is set, as on the GPU.
+        let grid = voxelize(
+            &[
+                tri([0.0, 0.0, 2.0], [4.0, 0.0, 2.0], [4.0, 4.0, 2.0]),
+                tri([0.0, 0.0, 2.0], [4.0, 4.0, 2.0], [0.0, 4.0, 2.0]),
+            ],
+            4,
+            Affine3A::IDENTITY,
+        );
+        assert_eq!(grid.count(), 16);
+        assert!(grid.occupied([0, 3, 2]) && grid.occupied([3, 0, 2]));
+        assert!(!grid.occupied([0, 0, 1]) && !grid.occupied([0, 0, 3]));
+    }
+
+    #[test]
+    fn a_sliver_seen_edge_on_is_kept() {
+        // A triangle lying in the plane x = 1.5, edge-on to X, the case §5 worries about.
+        let grid = voxelize(
+            &[tri([1.5, 0.2, 0.2], [1.5, 3.8, 0.2], [1.5, 0.2, 3.8])],
+            4,
+            Affine3A::IDENTITY,
+        );
+        assert!(grid.occupied([1, 0, 0]) && grid.occupied([1, 3, 0]));
+        assert!(!grid.occupied([0, 0, 0]) && !grid.occupied([2, 0, 0]));
+    }
+
+    #[test]
+    fn separated_triangles_and_cells_do_not_overlap() {
+        let near = Vec3::new(0.4, 0.4, 0.4);
+        assert!(triangle_overlaps_cell(near, near + Vec3::X, near + Vec3::Y));
+        // The plane x + y + z = 2 passes the cell's corner (½, ½, ½) at distance > 0.
+        let far = [
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::new(0.0, 0.0, 2.0),
+        ];
+        assert!(!triangle_overlaps_cell(far[0], far[1], far[2]));
+    }
+
+    #[test]
+    fn a_surface_under_a_slab_is_occluded_and_an_open_one_is_not() {
+        // A slab of cells one d_max/4 above a surface point.
+        let grid_from_world = Affine3A::from_scale(Vec3::splat(8.0));
+        let mut grid = VoxelGrid::new(16, grid_from_world);
+        for x in 0..16 {
+            for y in 0..16 {
+                grid.set([x, y, 3]);
+            }
+        }
+        let volume = crate::voxels::VoxelAoVolume {
+            half_extents: Vec3::ONE,
+            resolution: 16,
+            d_max: 1.0,
+            ..Default::default()
+        };
+        let rays = VoxelRays::new(&volume, grid_from_world);
+        let p = Vec3::new(1.0, 1.0, 0.0);
+        let covered = volume_occlusion(&grid, &rays, p, Vec3::Z);
+        let open = volume_occlusion(&grid, &rays, p, -Vec3::Z);
+        assert!(covered > 0.3, "{covered}");
+        assert_eq!(open, 0.0);
+    }
+
+    #[test]
+    fn rays_stay_in_the_cone() {
+        for i in 0..32 {
+            let d = ray_direction(i, 32, 0.5, 0.999, 0.3);
+            assert!((d.length() - 1.0).abs() < 1e-5 && d.z >= 0.5 - 1e-6, "{d}");
+        }
+        let frame = tangent_frame(Vec3::new(0.0, 0.6, -0.8));
+        assert!((frame * Vec3::Z - Vec3::new(0.0, 0.6, -0.8)).length() < 1e-6);
+        assert!(frame.x_axis.dot(frame.y_axis).abs() < 1e-6);
+    }
+
+    fn cube(center: Vec3, half: f32) -> Vec<Triangle> {
+        let mut scene = crate::reference::scene::TriangleScene::default();
+        scene.add_mesh(
+            &bevy::math::primitives::Cuboid::from_length(half * 2.0).into(),
+            Affine3A::from_translation(center),
+        );
+        scene.triangles
+    }
+
+    #[test]
+    fn closed_meshes_are_filled_and_open_ones_are_not() {
+        // A cube whose faces are aligned with the grid and whose face diagonals pass through
+        // column centres: shared edges must count once or whole columns flip.
+        let triangles = cube(Vec3::splat(4.0), 2.0);
+        assert!(is_closed(triangles.iter().map(|t| t.vertices)));
+        assert!(!is_closed(triangles[..10].iter().map(|t| t.vertices)));
+        let mut grid = voxelize(&triangles, 8, Affine3A::IDENTITY);
+        let surface = grid.count();
+        grid.fill_closed(&triangles);
+        for z in 0..8 {
+            for y in 0..8 {
+                for x in 0..8 {
+                    let inside = [x, y, z].iter().all(|&c| (2..6).contains(&c));
+                    let i = (x + 8 * (y + 8 * z)) as usize;
+                    let solid = grid.solid[i / 32] & (1 << (i % 32)) != 0;
+                    assert_eq!(solid, inside, "cell {x} {y} {z}");
+                }
+            }
+        }
+        // Cells 2..=6 along each axis: the surface shell and the filled interior.
+        assert!(surface < 125);
+        assert_eq!(grid.count(), 5 * 5 * 5);
+    }
+}

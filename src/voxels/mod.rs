@@ -1,0 +1,109 @@
+//! Voxel volumes: hybrid ambient occlusion from geometry rasterized into bit grids every frame
+//! (Reinbothe, Boubekeur & Alexa 2009, "Hybrid Ambient Occlusion").
+//!
+//! A [`VoxelAoVolume`] marks a region of interest that follows its entity. Each frame:
+//!
+//! 1. **Gather** (main world, [`PostUpdate`] after transform propagation): every visible mesh
+//!    reaching into a volume is deformed (skin, morph targets) on the CPU and its triangles are
+//!    moved into the volume's grid space.
+//! 2. **Voxelize** (GPU, once per frame, §5): the grids are cleared, then every triangle sets the
+//!    bit of every cell it touches. The paper rasterizes from one orthographic camera, which
+//!    drops triangles seen edge-on, and turns that camera by a random angle to make the loss
+//!    rare. Here a compute pass tests each triangle against each cell its plane crosses with the
+//!    separating-axis test, which is exact and conservative: no triangle is lost whatever its
+//!    orientation, and the CPU twin ([`reference::voxels`](crate::reference::voxels)) agrees
+//!    cell for cell up to rounding. Bit grids as in the paper, one bit per cell.
+//! 3. **Sample** (GPU, per view, §6): each pixel of a half-resolution AO map traces rays through
+//!    the grids; jitter comes from a hash of the pixel's world position, so it does not crawl
+//!    when the camera moves.
+//! 4. **Filter** (§7): the joint bilateral upsampling of [`filter`](crate::filter) (eq. 5–7)
+//!    brings the map to full resolution, then the cross-bilateral blur (the separable pair of
+//!    eq. 8) smooths the remaining noise.
+//! 5. **Compose**: the result joins the far field next to sphere and field occluders, and the
+//!    far field combines with the near field as [`FarFieldBlend`](crate::FarFieldBlend) says.
+//!
+//! [`ShowOccupiedVoxels`] on a volume draws its occupied cells over the image.
+
+mod component;
+mod gather;
+mod node;
+mod render;
+mod show;
+
+use bevy::app::{App, Plugin, PostUpdate};
+use bevy::asset::embedded_asset;
+use bevy::core_pipeline::schedule::Core3d;
+use bevy::ecs::prelude::*;
+use bevy::render::render_resource::SpecializedRenderPipelines;
+use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::shader::load_shader_library;
+use bevy::transform::TransformSystems;
+
+pub use component::{
+    ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelRays,
+    VoxelVolumeError,
+};
+
+pub(crate) use render::VoxelPipelines;
+
+use crate::schedule::DynamicAoSystems;
+
+/// Voxel volumes: per-frame gathering, voxelization, sampling and the occupied-voxel view.
+pub struct VoxelAoPlugin;
+
+impl Plugin for VoxelAoPlugin {
+    fn build(&self, app: &mut App) {
+        load_shader_library!(app, "voxel_grid.wgsl");
+        embedded_asset!(app, "voxelize.wgsl");
+        embedded_asset!(app, "voxel_ao.wgsl");
+        embedded_asset!(app, "show_voxels.wgsl");
+        app.register_type::<VoxelAoVolume>()
+            .register_type::<VoxelFalloff>()
+            .register_type::<ShowOccupiedVoxels>()
+            .init_resource::<gather::VoxelFrame>()
+            .init_resource::<gather::VoxelMeshCache>()
+            .add_systems(
+                PostUpdate,
+                (gather::forget_changed_meshes, gather::gather_triangles)
+                    .chain()
+                    // Joints and meshes have their final world transforms this frame.
+                    .after(TransformSystems::Propagate),
+            );
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_resource::<render::VoxelBuffers>()
+            .init_resource::<SpecializedRenderPipelines<show::ShowVoxelsPipeline>>()
+            .add_systems(ExtractSchedule, render::extract_voxels)
+            .add_systems(
+                Render,
+                (
+                    render::write_voxel_buffers.in_set(RenderSystems::PrepareResources),
+                    render::prepare_voxel_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    show::prepare_show_voxels
+                        .in_set(RenderSystems::PrepareBindGroups)
+                        .after(render::prepare_voxel_bind_groups),
+                ),
+            )
+            .add_systems(
+                Core3d,
+                (
+                    node::voxel_pass.in_set(DynamicAoSystems::FarField),
+                    show::show_voxels_pass
+                        .in_set(DynamicAoSystems::Debug)
+                        // Drawn over the AO debug view too.
+                        .after(crate::compose::node::debug_view_pass),
+                ),
+            );
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_gpu_resource::<VoxelPipelines>()
+            .init_gpu_resource::<show::ShowVoxelsPipeline>();
+    }
+}

@@ -1,0 +1,105 @@
+//! The voxel passes of a view: building the grids (once per frame, by the first view that needs
+//! them), sampling the half-size AO map, upsampling and blurring it.
+
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    camera::ExtractedCamera,
+    diagnostic::RecordDiagnostics,
+    extract_component::DynamicUniformIndex,
+    render_resource::{ComputePassDescriptor, PipelineCache},
+    renderer::{RenderContext, ViewQuery},
+    view::ViewUniformOffset,
+};
+
+use super::render::{VoxelBindGroups, VoxelBuffers, VoxelPipelines};
+use crate::filter::BlurPipelines;
+use crate::view::DynamicAoUniform;
+
+/// Most workgroups along one dispatch dimension (WebGPU's guaranteed limit).
+const MAX_WORKGROUPS: u32 = 65535;
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn voxel_pass(
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &VoxelBindGroups,
+        &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
+    )>,
+    mut buffers: ResMut<VoxelBuffers>,
+    pipelines: Res<VoxelPipelines>,
+    blur: Res<BlurPipelines>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (camera, bind_groups, view_offset, settings_index) = view.into_inner();
+    let (Some(size), Some(voxelize), Some(sample), Some(upsample), Some(blur_x), Some(blur_y)) = (
+        camera.physical_viewport_size,
+        pipeline_cache.get_compute_pipeline(pipelines.voxelize),
+        pipeline_cache.get_compute_pipeline(pipelines.sample),
+        pipeline_cache.get_compute_pipeline(blur.upsample),
+        pipeline_cache.get_compute_pipeline(blur.x),
+        pipeline_cache.get_compute_pipeline(blur.y),
+    ) else {
+        return;
+    };
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+
+    if buffers.needs_voxelizing
+        && let (Some(grid), Some(bind_group)) = (buffers.grid(), &buffers.voxelize_bind_group)
+    {
+        let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxelize");
+        let encoder = ctx.command_encoder();
+        // No debug group here: lavapipe crashes on one that encloses a buffer clear.
+        encoder.clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
+        let triangles = buffers.counts.triangles;
+        if triangles > 0 {
+            let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+                label: Some("dynamic_ao_voxelize"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(voxelize);
+            pass.set_bind_group(0, bind_group, &[]);
+            // One workgroup per triangle, folded into two dimensions past the per-dimension limit.
+            let x = triangles.min(MAX_WORKGROUPS);
+            pass.dispatch_workgroups(x, triangles.div_ceil(x), 1);
+        }
+        if let Some((target, bytes)) = &buffers.readback {
+            encoder.copy_buffer_to_buffer(grid, 0, target, 0, *bytes);
+        }
+        time_span.end(ctx.command_encoder());
+        buffers.needs_voxelizing = false;
+    }
+
+    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxel_ao");
+    let encoder = ctx.command_encoder();
+    encoder.push_debug_group("dynamic_ao_voxel_ao");
+    let half = (size + 1) / 2;
+    {
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some("dynamic_ao_voxel_ao"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(sample);
+        pass.set_bind_group(0, &bind_groups.sample, &[view_offset.offset]);
+        pass.dispatch_workgroups(half.x.div_ceil(8), half.y.div_ceil(8), 1);
+    }
+    let dynamic = [view_offset.offset, settings_index.index()];
+    let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
+    if let Some((x, y)) = &bind_groups.blur {
+        passes.push(("dynamic_ao_voxel_blur_x", blur_x, x));
+        passes.push(("dynamic_ao_voxel_blur_y", blur_y, y));
+    }
+    for (label, pipeline, bind_group) in passes {
+        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &dynamic);
+        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
+    }
+    encoder.pop_debug_group();
+    time_span.end(ctx.command_encoder());
+}

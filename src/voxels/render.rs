@@ -1,0 +1,384 @@
+//! Render world: this frame's triangles and volumes on the GPU, the bit grid, the pipelines of
+//! the voxelization and sampling passes, and their bind groups.
+
+use bevy::asset::{Handle, load_embedded_asset};
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::log::warn;
+use bevy::render::{
+    Extract,
+    extract_component::ComponentUniforms,
+    render_asset::RenderAssets,
+    render_resource::{
+        binding_types::{
+            storage_buffer_read_only_sized, storage_buffer_sized, texture_2d, texture_depth_2d,
+            texture_storage_2d, uniform_buffer,
+        },
+        *,
+    },
+    renderer::{RenderDevice, RenderQueue},
+    storage::{GpuShaderBuffer, ShaderBuffer},
+    view::{ViewUniform, ViewUniforms},
+};
+use bevy::utils::default;
+use bytemuck::Zeroable;
+
+use super::component::{VoxelGridReadback, grid_words};
+use super::gather::{GpuVolume, GridTriangle, VoxelFrame};
+use crate::filter::BlurPipelines;
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
+
+/// Counts of this frame's buffers (`VoxelParams` in `voxel_grid.wgsl`).
+#[derive(ShaderType, Clone, Copy, Debug, Default)]
+pub(crate) struct VoxelParams {
+    pub triangles: u32,
+    pub volumes: u32,
+    /// First word of the interior bits: the surface bits of every volume come first.
+    pub solid_offset: u32,
+}
+
+/// This frame's voxel data on the GPU.
+#[derive(Resource)]
+pub(crate) struct VoxelBuffers {
+    triangles: RawBufferVec<GridTriangle>,
+    volumes: RawBufferVec<GpuVolume>,
+    params: UniformBuffer<VoxelParams>,
+    /// The bit grids of all volumes, back to back; grows, never shrinks.
+    grid: Option<Buffer>,
+    /// 32-bit words of `grid` in use this frame: surface and interior bits.
+    pub words: u32,
+    pub counts: VoxelParams,
+    /// The storage buffer asset [`VoxelGridReadback`] names, if any.
+    readback_request: Option<Handle<ShaderBuffer>>,
+    /// Where the grids are copied for [`VoxelGridReadback`], and how many bytes.
+    pub readback: Option<(Buffer, u64)>,
+    /// Set each frame; the first view that samples the grids builds them and clears it.
+    pub needs_voxelizing: bool,
+    pub voxelize_bind_group: Option<BindGroup>,
+}
+
+impl Default for VoxelBuffers {
+    fn default() -> Self {
+        Self {
+            triangles: RawBufferVec::new(BufferUsages::STORAGE),
+            volumes: RawBufferVec::new(BufferUsages::STORAGE),
+            params: UniformBuffer::default(),
+            grid: None,
+            words: 0,
+            counts: VoxelParams::default(),
+            readback_request: None,
+            readback: None,
+            needs_voxelizing: false,
+            voxelize_bind_group: None,
+        }
+    }
+}
+
+impl VoxelBuffers {
+    pub fn grid(&self) -> Option<&Buffer> {
+        self.grid.as_ref()
+    }
+
+    /// Whether a volume in use asks for its occupied voxels to be drawn.
+    pub fn any_shown(&self) -> bool {
+        self.volumes.values()[..self.counts.volumes as usize]
+            .iter()
+            .any(|v| v.flags & 1 != 0)
+    }
+
+    /// Volumes, grid and counts, for the passes that read the grids.
+    pub fn bindings(
+        &self,
+    ) -> Option<(
+        BindingResource<'_>,
+        BindingResource<'_>,
+        BindingResource<'_>,
+    )> {
+        Some((
+            self.volumes.buffer()?.as_entire_binding(),
+            self.grid.as_ref()?.as_entire_binding(),
+            self.params.binding()?,
+        ))
+    }
+}
+
+/// Main world's triangles and volumes of this frame, copied into the staging vectors.
+pub(crate) fn extract_voxels(
+    mut buffers: ResMut<VoxelBuffers>,
+    frame: Extract<Res<VoxelFrame>>,
+    readback: Extract<Option<Res<VoxelGridReadback>>>,
+) {
+    buffers.triangles.clear();
+    buffers.triangles.extend(frame.triangles.iter().copied());
+    buffers.volumes.clear();
+    buffers.volumes.extend(frame.volumes.iter().copied());
+    buffers.readback_request = readback.as_ref().map(|r| r.0.clone());
+}
+
+/// Uploads this frame's data and makes sure the grid buffer is large enough.
+pub(crate) fn write_voxel_buffers(
+    mut buffers: ResMut<VoxelBuffers>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    storage_buffers: Res<RenderAssets<GpuShaderBuffer>>,
+    mut warned: Local<(bool, bool)>,
+) {
+    let buffers = buffers.as_mut();
+    // Volumes whose grids do not fit in one storage binding are dropped, last first. Each grid
+    // takes its words twice: surface bits and interior bits.
+    let limit = device.limits().max_storage_buffer_binding_size / 8;
+    let mut words = 0u64;
+    let mut kept = 0;
+    for volume in buffers.volumes.values() {
+        let end = u64::from(volume.offset) + u64::from(grid_words(volume.resolution));
+        if end > limit {
+            break;
+        }
+        words = end;
+        kept += 1;
+    }
+    let total = buffers.volumes.len();
+    if kept < total && !warned.0 {
+        warned.0 = true;
+        warn!(
+            "VoxelAoVolume: the grids of {total} volumes need more than this device's largest \
+             storage buffer ({} MiB); {} volumes cast no occlusion",
+            limit * 4 / (1 << 20),
+            total - kept
+        );
+    }
+    buffers.volumes.truncate(kept);
+    buffers.counts = VoxelParams {
+        triangles: buffers.triangles.len() as u32,
+        volumes: kept as u32,
+        solid_offset: words as u32,
+    };
+    if kept < total {
+        // Triangles of dropped volumes would index past the kept ones.
+        let kept = kept as u32;
+        let values: Vec<GridTriangle> = buffers
+            .triangles
+            .values()
+            .iter()
+            .filter(|t| t.a[3].to_bits() < kept)
+            .copied()
+            .collect();
+        buffers.triangles.clear();
+        buffers.triangles.extend(values);
+        buffers.counts.triangles = buffers.triangles.len() as u32;
+    }
+    buffers.words = words as u32 * 2;
+    // Bindings need a buffer even when there is nothing to bind; nothing reads these entries.
+    if buffers.triangles.is_empty() {
+        buffers.triangles.push(GridTriangle::zeroed());
+    }
+    if buffers.volumes.is_empty() {
+        buffers.volumes.push(GpuVolume::zeroed());
+    }
+    buffers.triangles.write_buffer(&device, &queue);
+    buffers.volumes.write_buffer(&device, &queue);
+    buffers.params.set(buffers.counts);
+    buffers.params.write_buffer(&device, &queue);
+    let needed = u64::from(buffers.words.max(1)) * 4;
+    if buffers.grid.as_ref().is_none_or(|g| g.size() < needed) {
+        buffers.grid = Some(device.create_buffer(&BufferDescriptor {
+            label: Some("dynamic_ao_voxel_grid"),
+            size: needed,
+            usage: BufferUsages::STORAGE | BufferUsages::COPY_DST | BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        }));
+    }
+    buffers.needs_voxelizing = buffers.counts.volumes > 0;
+
+    buffers.readback = None;
+    if let Some(request) = &buffers.readback_request
+        && let Some(target) = storage_buffers.get(request)
+    {
+        let bytes = u64::from(buffers.words) * 4;
+        if target.buffer.size() >= bytes {
+            buffers.readback = Some((target.buffer.clone(), bytes));
+        } else if !warned.1 {
+            warned.1 = true;
+            warn!(
+                "VoxelGridReadback: the buffer has {} bytes but the grids need {bytes}; nothing \
+                 is copied",
+                target.buffer.size()
+            );
+        }
+    }
+}
+
+/// The voxelization and sampling pipelines.
+#[derive(Resource)]
+pub(crate) struct VoxelPipelines {
+    voxelize_layout: BindGroupLayoutDescriptor,
+    sample_layout: BindGroupLayoutDescriptor,
+    pub voxelize: CachedComputePipelineId,
+    pub sample: CachedComputePipelineId,
+}
+
+impl FromWorld for VoxelPipelines {
+    fn from_world(world: &mut World) -> Self {
+        let voxelize_layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_voxelize_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_sized(false, None),
+                    uniform_buffer::<VoxelParams>(false),
+                ),
+            ),
+        );
+        let sample_layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_voxel_ao_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
+                    uniform_buffer::<VoxelParams>(false),
+                ),
+            ),
+        );
+        let cache = world.resource::<PipelineCache>();
+        let voxelize = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_voxelize_pipeline".into()),
+            layout: vec![voxelize_layout.clone()],
+            shader: load_embedded_asset!(world, "voxelize.wgsl"),
+            ..default()
+        });
+        let sample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_voxel_ao_pipeline".into()),
+            layout: vec![sample_layout.clone()],
+            shader: load_embedded_asset!(world, "voxel_ao.wgsl"),
+            ..default()
+        });
+        Self {
+            voxelize_layout,
+            sample_layout,
+            voxelize,
+            sample,
+        }
+    }
+}
+
+/// Per view: sampling into the half-size map, upsampling to full size, and the two blur passes.
+#[derive(Component)]
+pub(crate) struct VoxelBindGroups {
+    pub sample: BindGroup,
+    pub upsample: BindGroup,
+    /// X and Y passes; `None` when the blur is off.
+    pub blur: Option<(BindGroup, BindGroup)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_voxel_bind_groups(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    mut buffers: ResMut<VoxelBuffers>,
+    pipelines: Res<VoxelPipelines>,
+    blur: Res<BlurPipelines>,
+    pipeline_cache: Res<PipelineCache>,
+    view_uniforms: Res<ViewUniforms>,
+    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    views: Query<(
+        Entity,
+        &DynamicAoView,
+        &DynamicAoTextures,
+        &ViewPrepassTextures,
+    )>,
+) {
+    let buffers = buffers.as_mut();
+    let (Some(triangles), Some(volumes), Some(params), Some(grid)) = (
+        buffers.triangles.buffer(),
+        buffers.volumes.buffer(),
+        buffers.params.binding(),
+        buffers.grid.as_ref(),
+    ) else {
+        return;
+    };
+    buffers.voxelize_bind_group = Some(render_device.create_bind_group(
+        "dynamic_ao_voxelize_bind_group",
+        &pipeline_cache.get_bind_group_layout(&pipelines.voxelize_layout),
+        &BindGroupEntries::sequential((
+            triangles.as_entire_binding(),
+            volumes.as_entire_binding(),
+            grid.as_entire_binding(),
+            params.clone(),
+        )),
+    ));
+    let (Some(view_binding), Some(settings_binding)) =
+        (view_uniforms.uniforms.binding(), settings.binding())
+    else {
+        return;
+    };
+    for (entity, view, textures, prepass) in &views {
+        let (true, Some(low), Some(full), Some(depth), Some(normal)) = (
+            view.voxels,
+            textures.voxel_low.as_ref(),
+            textures.voxel_occlusion.as_ref(),
+            prepass.depth_view(),
+            prepass.normal_view(),
+        ) else {
+            commands.entity(entity).remove::<VoxelBindGroups>();
+            continue;
+        };
+        let sample = render_device.create_bind_group(
+            "dynamic_ao_voxel_ao_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipelines.sample_layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                depth,
+                normal,
+                volumes.as_entire_binding(),
+                grid.as_entire_binding(),
+                &low.default_view,
+                params.clone(),
+            )),
+        );
+        let upsample = render_device.create_bind_group(
+            "dynamic_ao_voxel_upsample_bind_group",
+            &pipeline_cache.get_bind_group_layout(&blur.upsample_layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                settings_binding.clone(),
+                depth,
+                normal,
+                &low.default_view,
+                &full.default_view,
+            )),
+        );
+        let blur_layout = pipeline_cache.get_bind_group_layout(&blur.layout);
+        let blur_pass = |label, input: &TextureView, output: &TextureView| {
+            render_device.create_bind_group(
+                label,
+                &blur_layout,
+                &BindGroupEntries::sequential((
+                    view_binding.clone(),
+                    settings_binding.clone(),
+                    depth,
+                    input,
+                    output,
+                )),
+            )
+        };
+        let scratch = &textures.blur_scratch.default_view;
+        let blur = view.voxel_blur.then(|| {
+            (
+                blur_pass("dynamic_ao_voxel_blur_x", &full.default_view, scratch),
+                blur_pass("dynamic_ao_voxel_blur_y", scratch, &full.default_view),
+            )
+        });
+        commands.entity(entity).insert(VoxelBindGroups {
+            sample,
+            upsample,
+            blur,
+        });
+    }
+}

@@ -1,0 +1,137 @@
+//! The occupied-voxel debug view: a full-screen pass over the lit image.
+
+use bevy::asset::{Handle, load_embedded_asset};
+use bevy::core_pipeline::FullscreenShader;
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    render_resource::{
+        binding_types::{storage_buffer_read_only_sized, texture_depth_2d, uniform_buffer},
+        *,
+    },
+    renderer::{RenderContext, RenderDevice, ViewQuery},
+    view::{ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms},
+};
+use bevy::shader::Shader;
+use bevy::utils::default;
+
+use super::render::{VoxelBuffers, VoxelParams};
+use crate::view::DynamicAoView;
+
+#[derive(Resource)]
+pub(crate) struct ShowVoxelsPipeline {
+    layout: BindGroupLayoutDescriptor,
+    fullscreen: FullscreenShader,
+    shader: Handle<Shader>,
+}
+
+impl FromWorld for ShowVoxelsPipeline {
+    fn from_world(world: &mut World) -> Self {
+        let layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_show_voxels_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::FRAGMENT,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    texture_depth_2d(),
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    uniform_buffer::<VoxelParams>(false),
+                ),
+            ),
+        );
+        Self {
+            layout,
+            fullscreen: world.resource::<FullscreenShader>().clone(),
+            shader: load_embedded_asset!(world, "show_voxels.wgsl"),
+        }
+    }
+}
+
+impl SpecializedRenderPipeline for ShowVoxelsPipeline {
+    /// The format of the view's main texture.
+    type Key = TextureFormat;
+
+    fn specialize(&self, format: Self::Key) -> RenderPipelineDescriptor {
+        RenderPipelineDescriptor {
+            label: Some("dynamic_ao_show_voxels_pipeline".into()),
+            layout: vec![self.layout.clone()],
+            vertex: self.fullscreen.to_vertex_state(),
+            fragment: Some(FragmentState {
+                shader: self.shader.clone(),
+                targets: vec![Some(ColorTargetState {
+                    format,
+                    blend: Some(BlendState::ALPHA_BLENDING),
+                    write_mask: ColorWrites::ALL,
+                })],
+                ..default()
+            }),
+            ..default()
+        }
+    }
+}
+
+/// The pipeline and bind group of a view that draws occupied voxels this frame.
+#[derive(Component)]
+pub(crate) struct ShowVoxels {
+    pipeline: CachedRenderPipelineId,
+    bind_group: BindGroup,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_show_voxels(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    pipeline: Res<ShowVoxelsPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    mut pipelines: ResMut<SpecializedRenderPipelines<ShowVoxelsPipeline>>,
+    buffers: Res<VoxelBuffers>,
+    view_uniforms: Res<ViewUniforms>,
+    views: Query<(Entity, &DynamicAoView, &ViewTarget, &ViewPrepassTextures)>,
+) {
+    let shown = buffers.any_shown();
+    for (entity, view, target, prepass) in &views {
+        let (true, true, Some(depth), Some(view_binding), Some((volumes, grid, params))) = (
+            shown,
+            view.voxels,
+            prepass.depth_view(),
+            view_uniforms.uniforms.binding(),
+            buffers.bindings(),
+        ) else {
+            commands.entity(entity).remove::<ShowVoxels>();
+            continue;
+        };
+        let bind_group = render_device.create_bind_group(
+            "dynamic_ao_show_voxels_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipeline.layout),
+            &BindGroupEntries::sequential((view_binding, depth, volumes, grid, params)),
+        );
+        let id = pipelines.specialize(&pipeline_cache, &pipeline, target.main_texture_format());
+        commands.entity(entity).insert(ShowVoxels {
+            pipeline: id,
+            bind_group,
+        });
+    }
+}
+
+pub(crate) fn show_voxels_pass(
+    view: ViewQuery<(&ViewTarget, &ShowVoxels, &ViewUniformOffset)>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (target, show, view_offset) = view.into_inner();
+    let Some(pipeline) = pipeline_cache.get_render_pipeline(show.pipeline) else {
+        return;
+    };
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some("dynamic_ao_show_voxels"),
+        color_attachments: &[Some(target.get_unsampled_color_attachment())],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_render_pipeline(pipeline);
+    pass.set_bind_group(0, &show.bind_group, &[view_offset.offset]);
+    pass.draw(0..3, 0..1);
+}

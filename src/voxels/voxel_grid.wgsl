@@ -1,0 +1,100 @@
+// Voxel grids and the rays traced through them (Reinbothe, Boubekeur & Alexa 2009, §5–6).
+// `reference::voxels` is the CPU twin; the integer hashing keeps the rays bit-identical.
+
+#define_import_path bevy_dynamic_ao::voxel_grid
+
+#import bevy_dynamic_ao::sampling::pcg_hash
+
+// `voxels::gather::GpuVolume` on the Rust side.
+struct VoxelVolume {
+    // Rows of the world → grid affine map; cell (x, y, z) spans [x, x + 1]³.
+    grid_from_world: array<vec4<f32>, 3>,
+    // First 32-bit word of the grid in the grid buffer.
+    offset: u32,
+    // Cells per axis; 0 marks an unused slot.
+    resolution: u32,
+    rays: u32,
+    steps: u32,
+    // cos of the half-angle of the cone the rays fill.
+    cos_spread: f32,
+    // Metres.
+    d_max: f32,
+    // Start offset of the rays along the normal, metres.
+    bias: f32,
+    // World-space size of the cells the jitter is constant over, metres.
+    noise_cell: f32,
+    // d_max + bias in cells per grid axis.
+    reach: vec3<f32>,
+    // Bit 0: the occupied voxels are drawn; bit 1: hits count without falloff.
+    flags: u32,
+}
+
+// Counts of this frame's buffers, which may be longer; `voxels::render::VoxelParams`.
+struct VoxelParams {
+    triangles: u32,
+    volumes: u32,
+    // Where the interior bits start: the grid buffer holds every volume's surface bits, then
+    // every volume's interior bits in the same layout.
+    solid_offset: u32,
+}
+
+const GOLDEN_RATIO_FRACTION: f32 = 0.618033988749895;
+const TAU: f32 = 6.283185307179586;
+
+fn to_grid(volume: VoxelVolume, p: vec3<f32>) -> vec3<f32> {
+    let h = vec4<f32>(p, 1.0);
+    return vec3<f32>(
+        dot(volume.grid_from_world[0], h),
+        dot(volume.grid_from_world[1], h),
+        dot(volume.grid_from_world[2], h),
+    );
+}
+
+// Wendland's compactly supported kernel, eq. 3.
+fn wendland(t: f32, h: f32) -> f32 {
+    if t > h {
+        return 0.0;
+    }
+    let s = 1.0 - t / h;
+    return s * s * s * s * (4.0 * t / h + 1.0);
+}
+
+// A hash of the world-space noise cell holding `p`: the same surface point gets the same rays
+// wherever the camera is (the object-space jitter of §6).
+fn cell_hash(p: vec3<f32>, cell: f32) -> u32 {
+    let c = vec3<i32>(floor(p / cell));
+    return pcg_hash(bitcast<u32>(c.x) ^ pcg_hash(bitcast<u32>(c.y) ^ pcg_hash(bitcast<u32>(c.z))));
+}
+
+// A uniform number in [0, 1) from a hash, exact in f32.
+fn unit_float(h: u32) -> f32 {
+    return f32(h >> 8u) / 16777216.0;
+}
+
+// An orthonormal frame around unit `n` (Duff et al. 2017).
+fn tangent_frame(n: vec3<f32>) -> mat3x3<f32> {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
+    return mat3x3<f32>(t, bt, n);
+}
+
+// Ray `i` of `count`: a regular spiral over the cone of half-angle acos(cos_spread) around the
+// z axis, uniform in solid angle, shifted by the jitter (j1, j2) ∈ [0, 1)².
+fn ray_direction(i: u32, count: u32, cos_spread: f32, j1: f32, j2: f32) -> vec3<f32> {
+    let cos_theta = 1.0 - (f32(i) + j1) / f32(count) * (1.0 - cos_spread);
+    let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    let phi = TAU * fract(f32(i) * GOLDEN_RATIO_FRACTION + j2);
+    return vec3<f32>(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+}
+
+// Linear index of cell `c` in its grid, or −1 outside the grid.
+fn cell_index(volume: VoxelVolume, c: vec3<i32>) -> i32 {
+    let n = i32(volume.resolution);
+    if any(c < vec3<i32>(0)) || any(c >= vec3<i32>(n)) {
+        return -1;
+    }
+    return c.x + n * (c.y + n * c.z);
+}
