@@ -4,8 +4,8 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--half-res] [--far-blend add|max] [--frames N] [--time SECONDS] --out-ao AO.png \
-//!     [--out-color COLOR.png]
+//!     [--half-res] [--far-blend add|max] [--voxel-falloff wendland|none] [--frames N] \
+//!     [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
@@ -274,6 +274,7 @@ fn place_volume(
             VoxelAoVolume {
                 half_extents: (hi - lo) / 2.0 + radius,
                 d_max: radius,
+                falloff: capture.options.voxel_falloff,
                 ..default()
             },
         ))

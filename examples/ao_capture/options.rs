@@ -2,13 +2,14 @@
 
 use std::path::PathBuf;
 
+use bevy_dynamic_ao::voxels::VoxelFalloff;
 use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique, FarFieldBlend};
 
 use crate::common::parse_number;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend add|max] \
-[--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff wendland|none] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -88,6 +89,8 @@ pub struct Options {
     pub far: Option<FarTerm>,
     /// How the far-field term joins the image-space one.
     pub far_blend: FarFieldBlend,
+    /// Distance falloff of the voxel volume's hits.
+    pub voxel_falloff: VoxelFalloff,
     pub preset: AoQuality,
     /// Half-width of the cross-bilateral blur, pixels (0 = off).
     pub blur: u32,
@@ -120,6 +123,7 @@ impl Options {
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
         let mut far_blend = FarFieldBlend::Add;
+        let mut voxel_falloff = VoxelFalloff::Wendland;
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -163,6 +167,17 @@ impl Options {
                         "max" => FarFieldBlend::Max,
                         other => {
                             return Err(format!("--far-blend takes add or max, got '{other}'"));
+                        }
+                    }
+                }
+                "--voxel-falloff" => {
+                    voxel_falloff = match value()?.as_str() {
+                        "wendland" => VoxelFalloff::Wendland,
+                        "none" => VoxelFalloff::None,
+                        other => {
+                            return Err(format!(
+                                "--voxel-falloff takes wendland or none, got '{other}'"
+                            ));
                         }
                     }
                 }
@@ -217,6 +232,7 @@ impl Options {
                 .ok_or_else(|| missing("--technique"))?,
             far: technique.and_then(|(_, far)| far),
             far_blend,
+            voxel_falloff,
             preset,
             blur,
             half_resolution,

@@ -1,10 +1,13 @@
 //! Skinned characters walking near each other and a wall: their far-field occlusion comes from
 //! spheres that are refit to the animated skin every frame (`SphereOccluder`), added to the
-//! image-space near field. The walker is the project's own generated asset
+//! image-space near field. With `--voxels`, each walker instead carries a `VoxelAoVolume` that
+//! follows it and is revoxelized every frame, skin, floor and passing neighbours included;
+//! `--show-voxels` draws the occupied cells. The walker is the project's own generated asset
 //! (`assets/characters/walker.glb`, written by `cargo run --example generate_assets`).
 //!
 //! Windowed: `cargo run --example deforming_characters`.
 //! Headless: `cargo run --example deforming_characters -- --headless --frames 20 --out walkers.png`.
+//! Voxels: `cargo run --example deforming_characters -- --voxels --show-voxels`.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -17,9 +20,9 @@ use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
-[--width W] [--height H] [--characters N] [--show-spheres] [--debug-view]
-keys: N near field on/off, F far field (spheres) on/off, M add/max blend, S show spheres,
-      D debug view, Esc quit";
+[--width W] [--height H] [--characters N] [--show-spheres] [--voxels] [--show-voxels] [--debug-view]
+keys: N near field on/off, F far field (spheres) on/off, V voxel volumes on/off, M add/max blend,
+      S show spheres, O show occupied voxels, D debug view, Esc quit";
 
 const WALKER: &str = "characters/walker.glb";
 
@@ -28,12 +31,19 @@ fn main() {
     let mut options = Options {
         characters: 6,
         show_spheres: false,
+        voxels: false,
+        show_voxels: false,
         debug_view: false,
     };
     let mut rest = args.rest.iter();
     while let Some(flag) = rest.next() {
         match flag.as_str() {
             "--show-spheres" => options.show_spheres = true,
+            "--voxels" => options.voxels = true,
+            "--show-voxels" => {
+                options.voxels = true;
+                options.show_voxels = true;
+            }
             "--debug-view" => options.debug_view = true,
             "--characters" => {
                 options.characters =
@@ -65,8 +75,15 @@ fn main() {
 struct Options {
     characters: u32,
     show_spheres: bool,
+    /// Each walker carries a voxel volume; spheres start switched off.
+    voxels: bool,
+    show_voxels: bool,
     debug_view: bool,
 }
+
+/// The region each walker's voxel volume covers around it: the body and the floor and walls
+/// within reach, metres.
+const WALKER_VOLUME: Vec3 = Vec3::new(1.1, 1.1, 1.1);
 
 /// A walker following a circle: centre, radius (metres), angular speed (radians per second),
 /// starting angle.
@@ -107,6 +124,8 @@ fn setup(world: &mut World) {
         Tonemapping::AcesFitted,
         DynamicAo {
             debug_view: options.debug_view,
+            spheres: !options.voxels,
+            voxels: options.voxels,
             ..default()
         },
         AmbientLight {
@@ -158,14 +177,35 @@ fn setup(world: &mut World) {
             speed: if slot % 2 == 0 { 0.9 } else { -0.8 },
             phase: slot as f32 * 1.1,
         };
-        commands
-            .spawn((
-                WorldAssetRoot(scene.clone()),
-                SphereOccluder::default(),
-                Transform::default(),
-                path,
-            ))
-            .observe(start_walking);
+        let mut walker = commands.spawn((
+            WorldAssetRoot(scene.clone()),
+            SphereOccluder::default(),
+            Transform::default(),
+            path,
+        ));
+        walker.observe(start_walking);
+        if options.voxels {
+            // A child, so the volume walks and turns with its walker.
+            walker.with_child((
+                Transform::from_xyz(0.0, WALKER_VOLUME.y - 0.1, 0.0),
+                VoxelAoVolume {
+                    half_extents: WALKER_VOLUME,
+                    resolution: 64,
+                    d_max: 0.8,
+                    ..default()
+                },
+            ));
+        }
+    }
+    if options.show_voxels {
+        world.flush();
+        let volumes: Vec<Entity> = world
+            .query_filtered::<Entity, With<VoxelAoVolume>>()
+            .iter(world)
+            .collect();
+        for volume in volumes {
+            world.entity_mut(volume).insert(ShowOccupiedVoxels);
+        }
     }
 }
 
@@ -205,17 +245,31 @@ fn walk(time: Res<Time>, mut walkers: Query<(&Path, &mut Transform)>) {
 }
 
 fn controls(
+    mut commands: Commands,
     keys: Res<ButtonInput<KeyCode>>,
     mut cameras: Query<&mut DynamicAo>,
     mut show_spheres: ResMut<ShowOccluderSpheres>,
+    volumes: Query<(Entity, Has<ShowOccupiedVoxels>), With<VoxelAoVolume>>,
 ) {
     if keys.just_pressed(KeyCode::KeyS) {
         show_spheres.0 = !show_spheres.0;
+    }
+    if keys.just_pressed(KeyCode::KeyO) {
+        for (volume, shown) in &volumes {
+            if shown {
+                commands.entity(volume).remove::<ShowOccupiedVoxels>();
+            } else {
+                commands.entity(volume).insert(ShowOccupiedVoxels);
+            }
+        }
     }
     for mut ao in &mut cameras {
         common::near_field_and_debug_keys(&keys, &mut ao);
         if keys.just_pressed(KeyCode::KeyF) {
             ao.spheres = !ao.spheres;
+        }
+        if keys.just_pressed(KeyCode::KeyV) {
+            ao.voxels = !ao.voxels;
         }
         if keys.just_pressed(KeyCode::KeyM) {
             ao.far_field_blend = match ao.far_field_blend {
@@ -230,6 +284,7 @@ fn show_settings(
     cameras: Query<&DynamicAo>,
     show_spheres: Res<ShowOccluderSpheres>,
     occluders: Query<&OccluderSpheres>,
+    volumes: Query<Has<ShowOccupiedVoxels>, With<VoxelAoVolume>>,
     mut text: Query<&mut Text, With<HelpLine>>,
 ) {
     let (Ok(ao), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
@@ -237,13 +292,19 @@ fn show_settings(
     };
     let on = |b: bool| if b { "on" } else { "off" };
     let spheres: usize = occluders.iter().map(|o| o.spheres.len()).sum();
+    let shown = volumes.iter().any(|shown| shown);
     text.0 = format!(
-        "near field {} | far field {} ({spheres} spheres, {:?}) | show spheres {} | debug view {}\n\
-         N near field  F far field  M add/max blend  S show spheres  D debug view  Esc quit",
+        "near field {} | spheres {} ({spheres}, {:?}) | voxels {} ({} volumes) | show spheres {} \
+         | show voxels {} | debug view {}\n\
+         N near field  F spheres  V voxels  M add/max blend  S show spheres  O show voxels  \
+         D debug view  Esc quit",
         on(ao.technique != AoTechnique::Off),
         on(ao.spheres),
         ao.far_field_blend,
+        on(ao.voxels),
+        volumes.iter().len(),
         on(show_spheres.0),
+        on(shown),
         on(ao.debug_view),
     );
 }

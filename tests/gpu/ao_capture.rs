@@ -87,6 +87,8 @@ fn lists_its_techniques() {
         "near-field+spheres",
         "fields",
         "near-field+fields",
+        "voxels",
+        "near-field+voxels",
     ] {
         assert!(
             text.lines().any(|l| l == name),
@@ -345,8 +347,8 @@ fn captures_the_generated_scene_close_to_ground_truth() {
 fn captures_the_far_field_of_the_generated_scene() {
     let dir = temp_dir("capture_spheres");
     let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
-    let capture_with = |technique: &str, blend: &str| {
-        let out_ao = dir.join(format!("{technique}_{blend}.png"));
+    let capture_falloff = |technique: &str, blend: &str, falloff: &str| {
+        let out_ao = dir.join(format!("{technique}_{blend}_{falloff}.png"));
         let out = run(&[
             "--scene",
             scene_path().to_str().unwrap(),
@@ -360,6 +362,8 @@ fn captures_the_far_field_of_the_generated_scene() {
             technique,
             "--far-blend",
             blend,
+            "--voxel-falloff",
+            falloff,
             "--time",
             &time.to_string(),
             "--out-ao",
@@ -379,6 +383,7 @@ fn captures_the_far_field_of_the_generated_scene() {
             .expect("a 16-bit grayscale PNG")
             .2
     };
+    let capture_with = |technique: &str, blend: &str| capture_falloff(technique, blend, "wendland");
     let capture = |technique: &str| capture_with(technique, "add");
     let spheres = capture("spheres");
     let near = capture("near-field");
@@ -461,5 +466,23 @@ fn captures_the_far_field_of_the_generated_scene() {
         both_wide < near_wide,
         "adding the far field should bring the capture closer to wide ground truth"
     );
+
+    // `voxels` puts one volume around the scene with d_max = R: it sees every box whole and
+    // the floor, within the same radius as the near field. Wendland's falloff (the default, as
+    // published) weights far hits down, so it finds less than ground truth, which counts every
+    // hit within R; without falloff it estimates ground truth's own quantity.
+    let (near_near, _) = report("near-field", &near);
+    let (wendland, _) = report("voxels", &capture("voxels"));
+    let unweighted = capture_falloff("voxels", "add", "none");
+    let (unweighted_near, _) = report("voxels, no falloff", &unweighted);
+    assert!(
+        unweighted.iter().any(|v| *v < 0.8),
+        "the voxels should darken the scene"
+    );
+    assert!(
+        unweighted_near < wendland && unweighted_near < near_near,
+        "no-falloff voxels {unweighted_near} vs ground truth"
+    );
+    println!("near field alone: {near_near:.4}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -78,6 +78,25 @@ fn deforming_characters_renders_headless() {
     println!("deforming_characters debug view: {one} occluded pixels with 1 walker, {four} with 4");
     assert!(four > one + 150, "the walkers should cast occlusion");
 
+    // With voxel volumes following the walkers, their occupied cells show in orange.
+    let result = run(&["--characters", "2", "--voxels", "--show-voxels"]);
+    assert!(
+        result.status.success(),
+        "deforming_characters --voxels failed:\n{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let orange = |rgb: &[[u8; 3]]| {
+        rgb.iter()
+            .filter(|p| p[0] > 150 && p[0] as u32 > p[2] as u32 + 80)
+            .count()
+    };
+    let shown = orange(&image_rgb(&out));
+    let result = run(&["--characters", "2", "--voxels"]);
+    assert!(result.status.success());
+    let hidden = orange(&image_rgb(&out));
+    println!("deforming_characters --voxels: {shown} orange pixels shown, {hidden} without");
+    assert!(shown > hidden + 300, "the occupied voxels should be drawn");
+
     let bad = run(&["--characters", "lots"]);
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--characters"));
@@ -115,6 +134,14 @@ fn toasters_renders_headless() {
 
 /// The mean of the colour channels of an 8-bit RGB(A) PNG, per pixel.
 fn image_luma(path: &Path) -> Vec<u8> {
+    image_rgb(path)
+        .iter()
+        .map(|p| ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8)
+        .collect()
+}
+
+/// The colour channels of an 8-bit RGB(A) PNG, per pixel.
+fn image_rgb(path: &Path) -> Vec<[u8; 3]> {
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(path).expect("the PNG exists"),
     ));
@@ -124,6 +151,6 @@ fn image_luma(path: &Path) -> Vec<u8> {
     let channels = info.color_type.samples();
     data[..info.buffer_size()]
         .chunks_exact(channels)
-        .map(|p| ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8)
+        .map(|p| [p[0], p[1], p[2]])
         .collect()
 }
