@@ -7,7 +7,10 @@
 //! The `far field, N spheres` rows splat N occluder spheres (small balls with a
 //! `SphereOccluder` each, scattered over the view) with the image-space term off; the
 //! `AO fields, N occluders` rows draw N toaster-sized boxes with an `AoField` each (one baked
-//! 32³ field shared by all).
+//! 32³ field shared by all). The `voxels` rows put one `VoxelAoVolume` around the room (plus
+//! extra balls for the triangle-count rows) with the image-space term off: `voxelize` is the
+//! per-frame grid build, `voxel AO` the sampling of the half-resolution map, `voxel filter` its
+//! upsampling and blur.
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
 
 #[path = "../examples/common/mod.rs"]
@@ -43,6 +46,26 @@ enum Config {
     /// AO fields alone, from 16 balls of the same size tessellated into about this many
     /// triangles: the cost should not depend on it.
     FieldBalls(u32),
+    /// One voxel volume alone.
+    Voxels(VoxelRun),
+}
+
+#[derive(Clone, Copy)]
+struct VoxelRun {
+    resolution: u32,
+    /// Triangles added to the room's few hundred, in balls of 960.
+    extra_triangles: u32,
+    rays: u32,
+    steps: u32,
+}
+
+const fn voxels(resolution: u32, extra_triangles: u32, rays: u32, steps: u32) -> Config {
+    Config::Voxels(VoxelRun {
+        resolution,
+        extra_triangles,
+        rays,
+        steps,
+    })
 }
 
 impl Config {
@@ -56,6 +79,13 @@ impl Config {
             Config::FieldBalls(triangles) => {
                 format!("AO fields, 16 balls of {triangles} triangles")
             }
+            Config::Voxels(run) => format!(
+                "voxels {}³, +{}k triangles, {} rays × {} steps",
+                run.resolution,
+                run.extra_triangles / 1000,
+                run.rays,
+                run.steps
+            ),
         }
     }
 }
@@ -95,6 +125,15 @@ fn main() {
         Config::Fields(256),
         Config::FieldBalls(20),
         Config::FieldBalls(10_000),
+        voxels(64, 0, 32, 8),
+        voxels(128, 0, 32, 8),
+        voxels(256, 0, 32, 8),
+        voxels(128, 10_000, 32, 8),
+        voxels(128, 100_000, 32, 8),
+        voxels(128, 0, 8, 8),
+        voxels(128, 0, 64, 8),
+        voxels(128, 0, 32, 4),
+        voxels(128, 0, 32, 16),
     ];
     let only: Option<Vec<String>> = args
         .iter()
@@ -125,6 +164,9 @@ fn main() {
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_spheres", "spheres"),
         ("dynamic_ao_fields", "fields"),
+        ("dynamic_ao_voxelize", "voxelize"),
+        ("dynamic_ao_voxel_ao", "voxel AO"),
+        ("dynamic_ao_voxel_filter", "voxel filter"),
         ("dynamic_ao_compose", "compose"),
     ];
     println!(
@@ -267,6 +309,14 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 ..default()
             });
         }
+        Config::Voxels(_) => {
+            camera.insert(DynamicAo {
+                technique: AoTechnique::Off,
+                spheres: false,
+                fields: false,
+                ..default()
+            });
+        }
         Config::Fields(_) | Config::FieldBalls(_) => {
             camera.insert(DynamicAo {
                 technique: AoTechnique::Off,
@@ -321,6 +371,33 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 },
             ));
         }
+    }
+    if let Config::Voxels(run) = config {
+        let hash = |i: u32| (i.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32;
+        let ball = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Sphere::new(0.15).mesh().uv(32, 16));
+        for i in 0..run.extra_triangles / 960 {
+            world.spawn((
+                Mesh3d(ball.clone()),
+                MeshMaterial3d(material.clone()),
+                Transform::from_xyz(
+                    -3.5 + 7.0 * hash(3 * i),
+                    0.15 + 2.0 * hash(3 * i + 1),
+                    -1.4 + 3.4 * hash(3 * i + 2),
+                ),
+            ));
+        }
+        world.spawn((
+            Transform::from_xyz(0.0, 1.3, 0.3),
+            VoxelAoVolume {
+                half_extents: Vec3::new(4.0, 1.5, 2.5),
+                resolution: run.resolution,
+                rays: run.rays,
+                steps: run.steps,
+                ..default()
+            },
+        ));
     }
     let field_occluders = match config {
         // Toaster-sized boxes on a grid over the floor, one baked field shared by all.

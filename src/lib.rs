@@ -23,8 +23,9 @@
 //! 3. [`spheres`] adds far-field occlusion from the spheres of every
 //!    [`SphereOccluder`](spheres::SphereOccluder), refit each frame to skinned and morphed
 //!    meshes (S&A §5), and [`fields`] from the precomputed AO field of every
-//!    [`AoField`](fields::AoField) (Malmer et al. 2005); both include occluders that are
-//!    off-screen or hidden.
+//!    [`AoField`](fields::AoField) (Malmer et al. 2005), and [`voxels`] from the geometry in every
+//!    [`VoxelAoVolume`](voxels::VoxelAoVolume), revoxelized each frame (Reinbothe et al. 2009);
+//!    all include occluders that are off-screen or hidden.
 //! 4. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
 //!    cross depth edges (Bavoil & Sainz 2008).
 //! 5. [`compose`] turns near- and far-field occlusion into visibility and writes it into the texture Bevy's PBR

@@ -12,10 +12,22 @@
 //!    rare. Here a compute pass tests each triangle against each cell its plane crosses with the
 //!    separating-axis test, which is exact and conservative: no triangle is lost whatever its
 //!    orientation, and the CPU twin ([`reference::voxels`](crate::reference::voxels)) agrees
-//!    cell for cell up to rounding. Bit grids as in the paper, one bit per cell.
+//!    cell for cell. Bit grids as in the paper, one bit per cell.
+//!
+//!    Departure: the interior of closed meshes is filled too (parity along the grid's z axis,
+//!    with shared edges counted once by the top-left rule). A surface-only grid is a shell one or
+//!    two cells thick, and the paper's few evenly spaced steps per ray jump over it into the
+//!    hollow inside: on our test scenes that found only half the occlusion ground truth does
+//!    (0.108 against 0.213 next to an off-screen box), with the fill 0.208. Meshes whose edges
+//!    are not all shared by exactly two triangles (planes, open shells) stay surface-only, and
+//!    where two closed meshes overlap, their common part reads as empty.
 //! 3. **Sample** (GPU, per view, §6): each pixel of a half-resolution AO map traces rays through
 //!    the grids; jitter comes from a hash of the pixel's world position, so it does not crawl
-//!    when the camera moves.
+//!    when the camera moves. Rays start one cell diagonal off the surface, so they never test
+//!    the cells the surface itself occupies. Eq. 4 is normalized by the sum of the rays' cosines
+//!    (as printed, a fully enclosed surface would read ½). Hits are weighted by Wendland's
+//!    kernel (eq. 3) as published, or fully ([`VoxelFalloff::None`]), which estimates the same
+//!    quantity as ray-traced ground truth.
 //! 4. **Filter** (§7): the joint bilateral upsampling of [`filter`](crate::filter) (eq. 5–7)
 //!    brings the map to full resolution, then the cross-bilateral blur (the separable pair of
 //!    eq. 8) smooths the remaining noise.

@@ -49,32 +49,38 @@ pub(crate) fn voxel_pass(
     if buffers.needs_voxelizing
         && let (Some(grid), Some(bind_group)) = (buffers.grid(), &buffers.voxelize_bind_group)
     {
-        let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxelize");
-        let encoder = ctx.command_encoder();
-        // No debug group here: lavapipe crashes on one that encloses a buffer clear.
-        encoder.clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
+        ctx.command_encoder()
+            .clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
         let triangles = buffers.counts.triangles;
         if triangles > 0 {
-            let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-                label: Some("dynamic_ao_voxelize"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(voxelize);
-            pass.set_bind_group(0, bind_group, &[]);
-            // One workgroup per triangle, folded into two dimensions past the per-dimension limit.
-            let x = triangles.min(MAX_WORKGROUPS);
-            pass.dispatch_workgroups(x, triangles.div_ceil(x), 1);
+            let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxelize");
+            {
+                let mut pass = ctx
+                    .command_encoder()
+                    .begin_compute_pass(&ComputePassDescriptor {
+                        label: Some("dynamic_ao_voxelize"),
+                        timestamp_writes: None,
+                    });
+                pass.set_pipeline(voxelize);
+                pass.set_bind_group(0, bind_group, &[]);
+                // One workgroup per triangle, folded into two dimensions past the per-dimension
+                // limit.
+                let x = triangles.min(MAX_WORKGROUPS);
+                pass.dispatch_workgroups(x, triangles.div_ceil(x), 1);
+            }
+            time_span.end(ctx.command_encoder());
         }
         if let Some((target, bytes)) = &buffers.readback {
-            encoder.copy_buffer_to_buffer(grid, 0, target, 0, *bytes);
+            ctx.command_encoder()
+                .copy_buffer_to_buffer(grid, 0, target, 0, *bytes);
         }
-        time_span.end(ctx.command_encoder());
         buffers.needs_voxelizing = false;
     }
 
     let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxel_ao");
+    // No debug groups in this file: lavapipe crashes recording one after the grid's buffer
+    // clear (the passes keep their labels).
     let encoder = ctx.command_encoder();
-    encoder.push_debug_group("dynamic_ao_voxel_ao");
     let half = (size + 1) / 2;
     {
         let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
@@ -85,6 +91,10 @@ pub(crate) fn voxel_pass(
         pass.set_bind_group(0, &bind_groups.sample, &[view_offset.offset]);
         pass.dispatch_workgroups(half.x.div_ceil(8), half.y.div_ceil(8), 1);
     }
+    time_span.end(ctx.command_encoder());
+
+    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxel_filter");
+    let encoder = ctx.command_encoder();
     let dynamic = [view_offset.offset, settings_index.index()];
     let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
     if let Some((x, y)) = &bind_groups.blur {
@@ -100,6 +110,5 @@ pub(crate) fn voxel_pass(
         pass.set_bind_group(0, bind_group, &dynamic);
         pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
     }
-    encoder.pop_debug_group();
     time_span.end(ctx.command_encoder());
 }
