@@ -83,7 +83,7 @@ struct Options {
 
 /// The region each walker's voxel volume covers around it: the body and the floor and walls
 /// within reach, metres.
-const WALKER_VOLUME: Vec3 = Vec3::new(1.1, 1.1, 1.1);
+const WALKER_VOLUME: Vec3 = Vec3::new(0.75, 1.05, 0.75);
 
 /// A walker following a circle: centre, radius (metres), angular speed (radians per second),
 /// starting angle.
@@ -190,8 +190,10 @@ fn setup(world: &mut World) {
                 Transform::from_xyz(0.0, WALKER_VOLUME.y - 0.1, 0.0),
                 VoxelAoVolume {
                     half_extents: WALKER_VOLUME,
-                    resolution: 64,
-                    d_max: 0.8,
+                    // Cells of 1.6 × 2.2 × 1.6 cm: finer than the gap between arm and body,
+                    // which coarser cells close (rays then start inside the arm).
+                    resolution: 96,
+                    d_max: 0.6,
                     ..default()
                 },
             ));

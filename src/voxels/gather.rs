@@ -224,6 +224,7 @@ pub(crate) fn gather_triangles(
         Option<&Name>,
     )>,
     meshes_query: MeshQuery,
+    orphans: Query<Entity, (With<VoxelGridInfo>, Without<VoxelAoVolume>)>,
     transforms: Query<&GlobalTransform>,
     morph_weights: Query<&MorphWeights>,
     meshes: Res<Assets<Mesh>>,
@@ -236,6 +237,10 @@ pub(crate) fn gather_triangles(
 ) {
     frame.volumes.clear();
     frame.triangles.clear();
+    // A volume whose component was removed is no longer in use.
+    for entity in &orphans {
+        commands.entity(entity).remove::<VoxelGridInfo>();
+    }
     let mut warn_once = |entity: Entity, name: Option<&Name>, problem: Problem, message: String| {
         if warned.insert((entity, problem)) {
             let label = name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));

@@ -18,7 +18,6 @@ use crate::view::DynamicAoUniform;
 /// Most workgroups along one dispatch dimension (WebGPU's guaranteed limit).
 const MAX_WORKGROUPS: u32 = 65535;
 
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn voxel_pass(
     view: ViewQuery<(
         &ExtractedCamera,
@@ -53,7 +52,6 @@ pub(crate) fn voxel_pass(
             .clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
         let triangles = buffers.counts.triangles;
         if triangles > 0 {
-            let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxelize");
             {
                 let mut pass = ctx
                     .command_encoder()
@@ -61,14 +59,15 @@ pub(crate) fn voxel_pass(
                         label: Some("dynamic_ao_voxelize"),
                         timestamp_writes: None,
                     });
+                let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_voxelize");
                 pass.set_pipeline(voxelize);
                 pass.set_bind_group(0, bind_group, &[]);
                 // One workgroup per triangle, folded into two dimensions past the per-dimension
                 // limit.
                 let x = triangles.min(MAX_WORKGROUPS);
                 pass.dispatch_workgroups(x, triangles.div_ceil(x), 1);
+                pass_span.end(&mut pass);
             }
-            time_span.end(ctx.command_encoder());
         }
         if let Some((target, bytes)) = &buffers.readback {
             ctx.command_encoder()
