@@ -73,7 +73,7 @@ pub mod prelude {
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;
     pub use crate::spheres::{OccluderSpheres, SphereOccluder};
-    pub use crate::voxels::{ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff};
+    pub use crate::voxels::{NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff};
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.

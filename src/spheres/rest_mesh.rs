@@ -23,7 +23,7 @@ impl std::fmt::Display for SphereMeshError {
             Self::NotTriangles(topology) => {
                 write!(
                     f,
-                    "its topology is {topology:?}; only triangle lists are clustered"
+                    "its topology is {topology:?}; only triangle lists are supported"
                 )
             }
             Self::NoPositions => write!(f, "it has no Float32x3 vertex positions"),

@@ -300,6 +300,12 @@ pub(crate) fn grid_words(resolution: u32) -> u32 {
 #[derive(Resource, Clone, Debug)]
 pub struct VoxelGridReadback(pub bevy::asset::Handle<bevy::render::storage::ShaderBuffer>);
 
+/// Keeps this mesh out of every voxel grid: it casts no voxel occlusion (use it for meshes that
+/// should not occlude, such as markers or effects, or that other occluders already cover).
+#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq)]
+#[reflect(Component, Default, Clone, Debug)]
+pub struct NotVoxelOccluder;
+
 /// Draws the occupied voxels of this [`VoxelAoVolume`] over every camera that has
 /// [`DynamicAo`](crate::DynamicAo): a debug view of what the grid holds this frame.
 #[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq)]

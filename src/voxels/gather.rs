@@ -22,7 +22,8 @@ use bevy::prelude::{GlobalTransform, Name};
 use bytemuck::{Pod, Zeroable};
 
 use super::component::{
-    ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo, VoxelRays, grid_words,
+    NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo, VoxelRays,
+    grid_words,
 };
 use crate::reference::voxels::is_closed;
 use crate::spheres::refit::{Deformer, Pose};
@@ -200,6 +201,7 @@ type MeshQuery<'w, 's> = Query<
         Option<&'static InheritedVisibility>,
         Option<&'static Name>,
     ),
+    Without<NotVoxelOccluder>,
 >;
 
 /// A volume in use this frame: its grid slot and its world-space bounds.

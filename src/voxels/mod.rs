@@ -52,8 +52,8 @@ use bevy::shader::load_shader_library;
 use bevy::transform::TransformSystems;
 
 pub use component::{
-    ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelRays,
-    VoxelVolumeError,
+    NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo,
+    VoxelGridReadback, VoxelRays, VoxelVolumeError,
 };
 
 pub(crate) use render::VoxelPipelines;
@@ -72,6 +72,7 @@ impl Plugin for VoxelAoPlugin {
         app.register_type::<VoxelAoVolume>()
             .register_type::<VoxelFalloff>()
             .register_type::<ShowOccupiedVoxels>()
+            .register_type::<NotVoxelOccluder>()
             .init_resource::<gather::VoxelFrame>()
             .init_resource::<gather::VoxelMeshCache>()
             .add_systems(

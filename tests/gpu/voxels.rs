@@ -214,6 +214,16 @@ fn gpu_voxelization_matches_a_cpu_triangle_cell_voxelization() {
             ..default()
         },
     );
+    // A ball that asks to stay out of the grids; the CPU voxelization leaves it out too.
+    let world = gpu.app.world_mut();
+    let ball = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Sphere::new(0.3).mesh().ico(2).unwrap());
+    world.spawn((
+        Mesh3d(ball),
+        Transform::from_xyz(0.8, 1.2, 0.8),
+        bevy_dynamic_ao::voxels::NotVoxelOccluder,
+    ));
     gpu.update(2);
     let meshes = mesh_triangles(
         &scene
@@ -585,7 +595,8 @@ fn voxel_ao_is_stable_under_a_slow_orbit() {
 }
 
 /// Zero-size, inverted and NaN volumes are skipped, out-of-range settings are clamped, a NaN
-/// transform skips its volume; the frame still renders and a good volume still works.
+/// transform skips its volume; inside a volume, a mesh with a NaN transform, a line mesh and a
+/// mesh of degenerate triangles are left out; the frame still renders and a good volume works.
 #[test]
 fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
     let scene = scenes::cube_on_plane();
@@ -631,6 +642,44 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
         .zip([Vec3::new(0.0, 0.8, 0.0), Vec3::new(50.0, 0.0, 0.0)])
         .map(|(v, at)| spawn_volume(&mut gpu, Transform::from_translation(at), v))
         .collect();
+    let world = gpu.app.world_mut();
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    let mut meshes = world.resource_mut::<Assets<Mesh>>();
+    let cube = meshes.add(Cuboid::new(0.3, 0.3, 0.3));
+    let lines = meshes.add(
+        Mesh::new(
+            bevy::mesh::PrimitiveTopology::LineList,
+            RenderAssetUsages::default(),
+        )
+        .with_inserted_attribute(
+            Mesh::ATTRIBUTE_POSITION,
+            vec![[0.0f32, 0.2, 0.0], [0.5, 0.2, 0.0]],
+        ),
+    );
+    let flat = meshes.add(
+        Mesh::new(
+            bevy::mesh::PrimitiveTopology::TriangleList,
+            RenderAssetUsages::default(),
+        )
+        .with_inserted_attribute(
+            Mesh::ATTRIBUTE_POSITION,
+            vec![[0.0f32, 0.2, 0.0], [0.5, 0.2, 0.0], [1.0, 0.2, 0.0]],
+        )
+        .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, vec![[0.0f32, 1.0, 0.0]; 3]),
+    );
+    world.spawn((
+        Mesh3d(cube),
+        MeshMaterial3d(material.clone()),
+        Transform::from_xyz(f32::NAN, 0.5, 0.0),
+    ));
+    world.spawn((Mesh3d(lines), Transform::from_xyz(0.5, 0.0, 0.8)));
+    world.spawn((
+        Mesh3d(flat),
+        MeshMaterial3d(material),
+        Transform::from_xyz(-0.5, 0.0, 0.8),
+    ));
     let frame = gpu.frame(3);
     let world = gpu.app.world();
     for entity in bad {
