@@ -1,6 +1,6 @@
 //! Dynamic ambient occlusion for Bevy.
 //!
-//! Add [`DynamicAoPlugin`] to the app and [`DynamicAo`](settings::DynamicAo) to a 3D camera:
+//! Add [`DynamicAoPlugin`] to the app and [`DynamicAo`] to a 3D camera:
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -32,7 +32,7 @@
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
 //!    environment specular darken; direct lights are untouched.
 //!
-//! [`reference`] evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
+//! [`reference`](mod@reference) evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
 //! the benchmarks and the `ao_capture` example use it.
 
 #![warn(missing_docs)]

@@ -3,7 +3,7 @@
 //! A field is a small 3D grid around an object, in the object's own space, holding at every
 //! grid point the fraction of the sphere of directions the object blocks (eq. 2) and the average
 //! occluded direction. [`baker`] computes it by ray casting (grid extent by eq. 4, border
-//! rescale §3.4.1, interior fill §3.4.2); [`format`] stores it as a versioned, checksummed
+//! rescale §3.4.1, interior fill §3.4.2); [`format`](mod@format) stores it as a versioned, checksummed
 //! `.aofield` file; [`AoFieldLoader`] loads such files as [`AoFieldData`] assets, and bad files
 //! fail to load with a message instead of panicking. The `ao_bake` example bakes every mesh of
 //! a glTF file.

@@ -28,9 +28,11 @@
 //!    (as printed, a fully enclosed surface would read ½). Hits are weighted by Wendland's
 //!    kernel (eq. 3) as published, or fully ([`VoxelFalloff::None`]), which estimates the same
 //!    quantity as ray-traced ground truth.
-//! 4. **Filter** (§7): the joint bilateral upsampling of [`filter`](crate::filter) (eq. 5–7)
-//!    brings the map to full resolution, then the cross-bilateral blur (the separable pair of
-//!    eq. 8) smooths the remaining noise.
+//! 4. **Filter** (§7): the joint bilateral upsampling of [`filter`](crate::filter) (eq. 5–7,
+//!    a 3 × 3 window of the half-resolution map) brings the map to full resolution, then the
+//!    near field's cross-bilateral blur smooths the remaining noise. That blur is separable like
+//!    eq. 8, but weights taps by a Gaussian of pixel distance and by depth difference rather
+//!    than by eq. 7's Wendland kernels over normals, positions and AO values.
 //! 5. **Compose**: the result joins the far field next to sphere and field occluders, and the
 //!    far field combines with the near field as [`FarFieldBlend`](crate::FarFieldBlend) says.
 //!
