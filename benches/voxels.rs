@@ -55,7 +55,7 @@ fn app(balls: u32, skinned: bool) -> App {
             0.15 + 2.0 * hash(3 * i + 1),
             -1.4 + 3.4 * hash(3 * i + 2),
         );
-        let mut entity = world.spawn((Mesh3d(handle.clone()), transform));
+        let entity = world.spawn((Mesh3d(handle.clone()), transform));
         if skinned {
             let root = entity.id();
             let joints = vec![
