@@ -322,33 +322,27 @@ pub(crate) fn gather_triangles(
         if !visibility.is_none_or(|v| v.get()) {
             continue;
         }
-        let rest =
-            match cache
-                .meshes
-                .entry(mesh3d.id())
-                .or_insert_with(|| match meshes.get(mesh3d.id()) {
-                    Some(mesh) => {
-                        RestMesh::from_mesh(mesh).map(|rest| Arc::new(VoxelMesh::new(rest)))
-                    }
-                    // Not loaded yet: try again next frame without caching the miss.
-                    None => Err(SphereMeshError::NoPositions),
-                }) {
-                Ok(rest) => rest.clone(),
-                Err(error) => {
-                    let error = error.clone();
-                    if meshes.contains(mesh3d.id()) {
-                        warn_once(
-                            entity,
-                            name,
-                            Problem::Mesh,
-                            format!("VoxelAoVolume: mesh {{label}} is not voxelized: {error}"),
-                        );
-                    } else {
-                        cache.meshes.remove(&mesh3d.id());
-                    }
-                    continue;
-                }
+        let id = mesh3d.id();
+        if !cache.meshes.contains_key(&id) {
+            // A mesh still loading is tried again next frame.
+            let Some(mesh) = meshes.get(id) else {
+                continue;
             };
+            let copied = RestMesh::from_mesh(mesh).map(|rest| Arc::new(VoxelMesh::new(rest)));
+            cache.meshes.insert(id, copied);
+        }
+        let rest = match &cache.meshes[&id] {
+            Ok(rest) => rest.clone(),
+            Err(error) => {
+                warn_once(
+                    entity,
+                    name,
+                    Problem::Mesh,
+                    format!("VoxelAoVolume: mesh {{label}} is not voxelized: {error}"),
+                );
+                continue;
+            }
+        };
         let (closed, lo, hi) = (rest.closed, rest.lo, rest.hi);
         let rest = &rest.rest;
 
