@@ -124,26 +124,15 @@ pub(crate) fn write_voxel_buffers(
     mut warned: Local<(bool, bool)>,
 ) {
     let buffers = buffers.as_mut();
-    // Volumes whose grids do not fit in one storage binding are dropped, last first. Each grid
-    // takes its words twice: surface bits and interior bits.
-    let limit = device.limits().max_storage_buffer_binding_size / 8;
-    let mut words = 0u64;
-    let mut kept = 0;
-    for volume in buffers.volumes.values() {
-        let end = u64::from(volume.offset) + u64::from(grid_words(volume.resolution));
-        if end > limit {
-            break;
-        }
-        words = end;
-        kept += 1;
-    }
+    let max_bytes = device.limits().max_storage_buffer_binding_size;
+    let (kept, words) = volumes_that_fit(buffers.volumes.values(), max_bytes);
     let total = buffers.volumes.len();
     if kept < total && !warned.0 {
         warned.0 = true;
         warn!(
             "VoxelAoVolume: the grids of {total} volumes need more than this device's largest \
-             storage buffer ({} MiB); {} volumes cast no occlusion",
-            limit * 4 / (1 << 20),
+             storage buffer ({} MiB); the last {} cast no occlusion",
+            max_bytes / (1 << 20),
             total - kept
         );
     }
@@ -206,6 +195,24 @@ pub(crate) fn write_voxel_buffers(
             );
         }
     }
+}
+
+/// How many of `volumes`, in order, fit in one storage binding of `max_bytes` (each grid takes
+/// its words twice: surface bits and interior bits), and the words per layer they take. Volumes
+/// that do not fit are dropped, last first.
+fn volumes_that_fit(volumes: &[GpuVolume], max_bytes: u64) -> (usize, u64) {
+    let limit = max_bytes / 8;
+    let mut words = 0u64;
+    let mut kept = 0;
+    for volume in volumes {
+        let end = u64::from(volume.offset) + u64::from(grid_words(volume.resolution));
+        if end > limit {
+            break;
+        }
+        words = end;
+        kept += 1;
+    }
+    (kept, words)
 }
 
 /// The voxelization and sampling pipelines.
@@ -380,5 +387,32 @@ pub(crate) fn prepare_voxel_bind_groups(
             upsample,
             blur,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volumes_past_the_binding_limit_are_dropped_last_first() {
+        // 512³ cells are 4 Mi words, 16 MiB per layer: four volumes fill 128 MiB.
+        let words = grid_words(512);
+        let volumes: Vec<GpuVolume> = (0..5)
+            .map(|i| GpuVolume {
+                offset: i * words,
+                resolution: 512,
+                ..Default::default()
+            })
+            .collect();
+        assert_eq!(
+            volumes_that_fit(&volumes, 128 << 20),
+            (4, 4 * u64::from(words))
+        );
+        assert_eq!(
+            volumes_that_fit(&volumes, 1 << 30),
+            (5, 5 * u64::from(words))
+        );
+        assert_eq!(volumes_that_fit(&volumes, 16 << 20), (0, 0));
     }
 }
