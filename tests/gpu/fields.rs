@@ -13,7 +13,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{fields::field_occlusion, metrics::rmse, scene::TriangleScene};
 
 use crate::examples::example_binary;
-use crate::harness::{GPU_TURN, Gpu, SceneSpec, WIDTH, band, difference_stats};
+use crate::harness::{GPU_TURN, Gpu, WIDTH, band, difference_stats};
 use crate::scenes;
 
 fn small_field() -> AoFieldData {
@@ -255,16 +255,7 @@ fn gpu_fields_match_the_cpu_evaluation() {
 /// floor beside it as ground truth does, where the near field and Bevy's SSAO see nothing.
 #[test]
 fn an_off_screen_box_darkens_the_floor_through_its_field() {
-    let scene = SceneSpec::new(Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
-        .with(
-            Plane3d::default().mesh().size(10.0, 10.0),
-            Transform::IDENTITY,
-        )
-        .with(
-            Cuboid::new(1.0, 1.2, 1.0),
-            Transform::from_xyz(2.0, 0.6, 0.0),
-        );
-    let mut scene = scene;
+    let mut scene = scenes::box_beside_view();
     scene.fields.push((1, quick_field()));
     let mut gpu = gpu_with_fields(&scene, DynamicAo::default());
     gpu.set_ao(|ao| ao.fields = false);

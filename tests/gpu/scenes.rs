@@ -57,6 +57,17 @@ pub fn ball_near_wall() -> SceneSpec {
     )
 }
 
+/// A camera looking straight down at a floor, with a 1 × 1.2 × 1 m box just outside the right
+/// edge of its view: occlusion the depth buffer cannot see.
+pub fn box_beside_view() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(1.0, 1.2, 1.0),
+            Transform::from_xyz(2.0, 0.6, 0.0),
+        )
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [

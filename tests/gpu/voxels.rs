@@ -478,15 +478,7 @@ impl Comparison {
 /// A box just outside the view of a camera looking down at the floor.
 #[test]
 fn an_off_screen_occluder_darkens_the_floor_like_ground_truth() {
-    let scene = SceneSpec::new(Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
-        .with(
-            Plane3d::default().mesh().size(10.0, 10.0),
-            Transform::IDENTITY,
-        )
-        .with(
-            Cuboid::new(1.0, 1.2, 1.0),
-            Transform::from_xyz(2.0, 0.6, 0.0),
-        );
+    let scene = scenes::box_beside_view();
     let comparison = against_truth(
         &scene,
         Transform::from_xyz(1.0, 0.8, 0.0),
