@@ -31,7 +31,7 @@ use bevy::render::{
     diagnostic::RenderDiagnosticsPlugin, render_resource::TextureFormat,
     renderer::RenderAdapterInfo,
 };
-use bevy_dynamic_ao::fields::ActiveAoField;
+use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
 use bevy_dynamic_ao::prelude::*;
 
 const WARMUP_FRAMES: u32 = 10;
@@ -50,6 +50,17 @@ enum Config {
     FieldBalls(u32),
     /// One voxel volume alone.
     Voxels(VoxelRun),
+    /// The default near field at this radius (metres), joined by one far-field term with every
+    /// mesh of the room its occluder (`None`: the near field alone).
+    Joined(Option<Far>, f32),
+}
+
+/// A far-field term for [`Config::Joined`].
+#[derive(Clone, Copy, PartialEq)]
+enum Far {
+    Spheres,
+    Fields,
+    Voxels,
 }
 
 #[derive(Clone, Copy)]
@@ -61,6 +72,7 @@ struct VoxelRun {
     steps: u32,
 }
 
+/// A voxel-volume row; `steps` 0 walks every cell (the default), otherwise the paper's march.
 const fn voxels(resolution: u32, extra_triangles: u32, rays: u32, steps: u32) -> Config {
     Config::Voxels(VoxelRun {
         resolution,
@@ -82,12 +94,22 @@ impl Config {
                 format!("AO fields, 16 balls of {triangles} triangles")
             }
             Config::Voxels(run) => format!(
-                "voxels {}³, +{}k triangles, {} rays × {} steps",
+                "voxels {}³, +{}k triangles, {} rays × {}",
                 run.resolution,
                 run.extra_triangles / 1000,
                 run.rays,
-                run.steps
+                if run.steps == 0 {
+                    "every cell".to_string()
+                } else {
+                    format!("{} steps", run.steps)
+                }
             ),
+            Config::Joined(far, radius) => match far {
+                None => format!("near field, R = {radius} m"),
+                Some(Far::Spheres) => format!("near + spheres, R = {radius} m"),
+                Some(Far::Fields) => format!("near + fields, R = {radius} m"),
+                Some(Far::Voxels) => format!("near + voxels, R = {radius} m"),
+            },
         }
     }
 }
@@ -127,16 +149,24 @@ fn main() {
         Config::Fields(256),
         Config::FieldBalls(20),
         Config::FieldBalls(10_000),
-        voxels(8, 0, 32, 8),
-        voxels(64, 0, 32, 8),
+        voxels(8, 0, 32, 0),
+        voxels(64, 0, 32, 0),
+        voxels(128, 0, 32, 0),
+        voxels(256, 0, 32, 0),
+        voxels(128, 10_000, 32, 0),
+        voxels(128, 100_000, 32, 0),
+        voxels(128, 0, 8, 0),
+        voxels(128, 0, 64, 0),
         voxels(128, 0, 32, 8),
-        voxels(256, 0, 32, 8),
-        voxels(128, 10_000, 32, 8),
-        voxels(128, 100_000, 32, 8),
-        voxels(128, 0, 8, 8),
-        voxels(128, 0, 64, 8),
-        voxels(128, 0, 32, 4),
         voxels(128, 0, 32, 16),
+        Config::Joined(None, 0.75),
+        Config::Joined(Some(Far::Spheres), 0.75),
+        Config::Joined(Some(Far::Fields), 0.75),
+        Config::Joined(Some(Far::Voxels), 0.75),
+        Config::Joined(None, 2.0),
+        Config::Joined(Some(Far::Spheres), 2.0),
+        Config::Joined(Some(Far::Fields), 2.0),
+        Config::Joined(Some(Far::Voxels), 2.0),
     ];
     let only: Option<Vec<String>> = args
         .iter()
@@ -224,8 +254,9 @@ fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
     for _ in 0..2000 {
         let world = app.world_mut();
         let waiting = world
-            .query_filtered::<(), (With<AoField>, Without<ActiveAoField>)>()
+            .query_filtered::<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>()
             .iter(world)
+            .filter(|(active, pending)| !active || *pending)
             .count();
         if waiting == 0 {
             break;
@@ -269,6 +300,7 @@ fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
         .sum();
     let name = match config {
         Config::Spheres(_) => format!("far field, {spheres} spheres"),
+        Config::Joined(Some(Far::Spheres), _) => format!("{} ({spheres} proxies)", config.name()),
         _ => config.name(),
     };
     eprintln!("{name}: {passes:?}");
@@ -327,6 +359,15 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 ..default()
             });
         }
+        Config::Joined(far, radius) => {
+            camera.insert(DynamicAo {
+                radius: *radius,
+                spheres: *far == Some(Far::Spheres),
+                fields: *far == Some(Far::Fields),
+                voxels: *far == Some(Far::Voxels),
+                ..default()
+            });
+        }
     }
     let mut meshes = world.resource_mut::<Assets<Mesh>>();
     let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));
@@ -336,12 +377,17 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
     let material = world
         .resource_mut::<Assets<StandardMaterial>>()
         .add(StandardMaterial::default());
+    let mut room = Vec::new();
     let mut spawn = |mesh: &Handle<Mesh>, transform: Transform| {
-        world.spawn((
-            Mesh3d(mesh.clone()),
-            MeshMaterial3d(material.clone()),
-            transform,
-        ));
+        room.push(
+            world
+                .spawn((
+                    Mesh3d(mesh.clone()),
+                    MeshMaterial3d(material.clone()),
+                    transform,
+                ))
+                .id(),
+        );
     };
     spawn(&floor, Transform::IDENTITY);
     spawn(&wall, Transform::from_xyz(0.0, 2.0, -1.6));
@@ -351,6 +397,26 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
             Transform::from_xyz(-2.0 + i as f32, 0.5, -0.9 + 0.3 * (i % 2) as f32),
         );
         spawn(&ball, Transform::from_xyz(-2.0 + i as f32, 0.5, 0.8));
+    }
+    if let Config::Joined(Some(far), _) = config {
+        // Every mesh of the room an occluder, as `ao_capture` sets a scene up.
+        for &mesh in &room {
+            match far {
+                Far::Spheres => {
+                    world.entity_mut(mesh).insert(SphereOccluder::default());
+                }
+                Far::Fields => {
+                    world.entity_mut(mesh).insert(AoField::default());
+                }
+                Far::Voxels => {}
+            }
+        }
+        if *far == Far::Voxels {
+            world.spawn((
+                Transform::from_xyz(0.0, 1.3, 0.3),
+                VoxelAoVolume::new(Vec3::new(4.0, 1.5, 2.5)),
+            ));
+        }
     }
     if let Config::Spheres(count) = config {
         // Small balls of 16 spheres each, scattered with a fixed hash over the visible room.
@@ -397,7 +463,11 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
                 half_extents: Vec3::new(4.0, 1.5, 2.5),
                 resolution: run.resolution,
                 rays: run.rays,
-                steps: run.steps,
+                march: if run.steps == 0 {
+                    VoxelMarch::Cells
+                } else {
+                    VoxelMarch::Steps(run.steps)
+                },
                 ..default()
             },
         ));

@@ -20,15 +20,18 @@
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
 //! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4), or
 //!    [`horizon`] computes horizon-based occlusion from the front layer (Bavoil & Sainz 2008).
-//! 3. [`spheres`] adds far-field occlusion from the spheres of every
-//!    [`SphereOccluder`](spheres::SphereOccluder), refit each frame to skinned and morphed
-//!    meshes (S&A §5), and [`fields`] from the precomputed AO field of every
+//! 3. [`spheres`] adds far-field occlusion from the proxies (boxes, or the paper's spheres) of
+//!    every [`SphereOccluder`](spheres::SphereOccluder), refit each frame to skinned and morphed
+//!    meshes (S&A §5), [`fields`] from the precomputed AO field of every
 //!    [`AoField`](fields::AoField) (Malmer et al. 2005), and [`voxels`] from the geometry in every
 //!    [`VoxelAoVolume`](voxels::VoxelAoVolume), revoxelized each frame (Reinbothe et al. 2009);
-//!    all include occluders that are off-screen or hidden.
+//!    all include occluders that are off-screen or hidden. Every term measures what a ray tracer
+//!    measures: the share of the cosine-weighted hemisphere blocked within the camera's
+//!    [`radius`](DynamicAo::radius); the papers' own weightings are options.
 //! 4. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
 //!    cross depth edges (Bavoil & Sainz 2008).
-//! 5. [`compose`] turns near- and far-field occlusion into visibility and writes it into the texture Bevy's PBR
+//! 5. [`compose`] joins near- and far-field occlusion, counting each occluder once
+//!    ([`FarFieldBlend`]), turns it into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
 //!    environment specular darken; direct lights are untouched.
 //!
@@ -72,8 +75,10 @@ pub mod prelude {
     };
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;
-    pub use crate::spheres::{OccluderSpheres, SphereOccluder};
-    pub use crate::voxels::{NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff};
+    pub use crate::spheres::{OccluderSpheres, ProxyReach, ProxyShape, SphereOccluder};
+    pub use crate::voxels::{
+        NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelMarch,
+    };
 }
 
 /// Adds dynamic ambient occlusion to every camera that has a [`DynamicAo`] component.
@@ -89,6 +94,8 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/settings.wgsl");
         load_shader_library!(app, "shaders/image_space_bindings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
+        load_shader_library!(app, "shaders/cap_occlusion.wgsl");
+        load_shader_library!(app, "shaders/proxy_occlusion.wgsl");
 
         app.register_type::<DynamicAo>()
             .register_type::<readback::AoReadback>()

@@ -7,6 +7,9 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 /// Default world-space AO radius r_far, in metres.
 pub const DEFAULT_RADIUS: f32 = 0.75;
+/// Default reach of the image-space technique when far-field terms take part, metres: beyond it
+/// the far field counts every occluder (see [`DynamicAo::near_field_radius`]).
+pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.75;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
 /// Default half-width of the cross-bilateral blur, pixels.
@@ -31,10 +34,24 @@ pub struct DynamicAo {
     pub technique: AoTechnique,
     /// Sample budget of the near-field pass. Default: [`AoQuality::High`].
     pub quality: AoQuality,
-    /// r_far of Shanmugam & Arikan eq. 4: occluders farther than this from the receiver are
-    /// ignored, and the sampling disk is this radius projected on screen.
+    /// R: the distance every term measures occlusion within. The result estimates what a ray
+    /// tracer measures: the share of the cosine-weighted hemisphere whose rays hit geometry
+    /// closer than R. Occluders farther than this are ignored by every technique (r_far of
+    /// Shanmugam & Arikan eq. 4 for the near field, the reach of sphere occluders, the extent of
+    /// baked AO fields, the ray length in voxel volumes).
     /// Units: metres (world units). Valid: > 0. Default: [`DEFAULT_RADIUS`].
     pub radius: f32,
+    /// How far the image-space technique reaches when far-field terms take part under
+    /// [`FarFieldBlend::CountOnce`]: it counts the occluders within `min(radius,
+    /// near_field_radius)` that the ND-buffer shows, and the far-field terms count everything
+    /// else within `radius`: occluders beyond this distance, and nearer ones the ND-buffer does
+    /// not hold (off-screen, or hidden behind both of its layers). Image-space AO loses accuracy
+    /// at large radii (each of its samples then stands for a large patch); far-field proxies
+    /// do not. With no far-field occluder in the scene, or another blend, the image-space
+    /// technique reaches the whole `radius`. Give every mesh that should occlude beyond this
+    /// distance a far-field occluder (or cover it with a voxel volume).
+    /// Units: metres. Valid: > 0. Default: [`DEFAULT_NEAR_FIELD_RADIUS`].
+    pub near_field_radius: f32,
     /// Multiplier on the summed occlusion before clamping to [0, 1]. No unit.
     /// Valid: ≥ 0. Default: [`DEFAULT_INTENSITY`] (the formula as published).
     pub intensity: f32,
@@ -48,14 +65,14 @@ pub struct DynamicAo {
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
     /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `false`.
     pub half_resolution: bool,
-    /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)
-    /// in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are off-screen or
-    /// hidden. Works with every technique except [`AoTechnique::BevySsao`] (whose result Bevy
+    /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)'s
+    /// proxies in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are
+    /// off-screen or hidden. Works with every technique except [`AoTechnique::BevySsao`] (whose result Bevy
     /// writes itself); with [`AoTechnique::Off`] the far field is the whole occlusion.
     /// Default: `true` (a scene without sphere occluders costs one cleared buffer).
     pub spheres: bool,
-    /// How the far field joins the image-space term. Default: [`FarFieldBlend::Add`], as
-    /// Shanmugam & Arikan §6 publish it.
+    /// How the far field joins the image-space term. Default: [`FarFieldBlend::CountOnce`]:
+    /// every occluder counted once.
     pub far_field_blend: FarFieldBlend,
     /// Add the occlusion of every [`AoField`](crate::fields::AoField) occluder (Malmer et al.
     /// 2005), also from occluders that are off-screen or hidden; it joins the far field. Not with
@@ -79,13 +96,14 @@ impl Default for DynamicAo {
             technique: AoTechnique::default(),
             quality: AoQuality::default(),
             radius: DEFAULT_RADIUS,
+            near_field_radius: DEFAULT_NEAR_FIELD_RADIUS,
             intensity: DEFAULT_INTENSITY,
             horizon: HorizonParams::default(),
             ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
             half_resolution: false,
             spheres: true,
-            far_field_blend: FarFieldBlend::Add,
+            far_field_blend: FarFieldBlend::CountOnce,
             fields: true,
             field_shading: FieldShading::Cone,
             voxels: true,
@@ -167,6 +185,16 @@ impl DynamicAo {
             self.radius
         } else {
             DEFAULT_RADIUS
+        }
+    }
+
+    /// The near-field radius actually used: non-finite or non-positive values fall back to the
+    /// default.
+    pub fn effective_near_field_radius(&self) -> f32 {
+        if self.near_field_radius.is_finite() && self.near_field_radius > 0.0 {
+            self.near_field_radius
+        } else {
+            DEFAULT_NEAR_FIELD_RADIUS
         }
     }
 
@@ -276,19 +304,27 @@ pub enum FieldShading {
     OcclusionOnly,
 }
 
-/// How near-field (image-space) and far-field (sphere and AO field) occlusion combine.
+/// How near-field (image-space) and far-field (spheres, AO fields, voxel volumes) occlusion
+/// combine.
 ///
-/// Both terms see an occluder that is on screen and close by, so adding them counts it twice;
-/// the paper accepts that and relies on A_ψ = 1 inside the spheres. Taking the larger term never
-/// counts an occluder twice, but undercounts two different occluders on the same pixel. On the
-/// test scenes `Max` is closer to ground truth (see `BENCHMARKS.md`).
+/// An occluder on screen and close by is seen by both the image-space technique and the far-field
+/// proxies, so adding the two terms counts it twice (on our test scenes that made the image worse
+/// than the near field alone). [`CountOnce`](Self::CountOnce) gives every occluder to one term:
+/// the image-space technique counts what the ND-buffer shows within
+/// [`DynamicAo::near_field_radius`], the far-field terms count the rest.
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[reflect(Default, Clone, Debug, PartialEq, Hash)]
 pub enum FarFieldBlend {
-    /// near + far, clamped to 1 (Shanmugam & Arikan 2007, §6).
+    /// Each occluder counted once: the far-field terms leave out the occluders the ND-buffer
+    /// holds (on screen, in front of or between its two layers) within the near field's reach,
+    /// and the two terms join as independent occluders, 1 − (1 − near)(1 − far).
     #[default]
+    CountOnce,
+    /// near + far, clamped to 1, with the far field counting every occluder (Shanmugam & Arikan
+    /// 2007, §6): occluders in view count twice.
     Add,
-    /// max(near, far).
+    /// max(near, far), with the far field counting every occluder: never counts an occluder
+    /// twice, but two different occluders of one pixel only count once.
     Max,
 }
 
@@ -298,7 +334,20 @@ impl FarFieldBlend {
         match self {
             FarFieldBlend::Add => 0,
             FarFieldBlend::Max => 1,
+            FarFieldBlend::CountOnce => 2,
         }
+    }
+
+    /// Every blend with the name `ao_capture --far-blend` takes for it.
+    pub const ALL: [(&'static str, FarFieldBlend); 3] = [
+        ("count-once", FarFieldBlend::CountOnce),
+        ("add", FarFieldBlend::Add),
+        ("max", FarFieldBlend::Max),
+    ];
+
+    /// The blend with this command-line name, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, b)| *b)
     }
 }
 
@@ -579,6 +628,8 @@ mod tests {
     fn defaults_match_the_documentation() {
         let ao = DynamicAo::default();
         assert_eq!(ao.radius, DEFAULT_RADIUS);
+        assert_eq!(ao.near_field_radius, DEFAULT_NEAR_FIELD_RADIUS);
+        assert_eq!(ao.far_field_blend, FarFieldBlend::CountOnce);
         assert_eq!(ao.intensity, DEFAULT_INTENSITY);
         assert_eq!(ao.technique, AoTechnique::NearField);
         assert_eq!(ao.quality, AoQuality::High);

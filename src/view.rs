@@ -21,7 +21,8 @@ use bevy::render::{
 };
 
 use crate::fields::ActiveAoField;
-use crate::settings::{AoTechnique, DynamicAo};
+use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
 use crate::spheres::OccluderSpheres;
 use crate::voxels::VoxelGridInfo;
 
@@ -31,8 +32,11 @@ pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
 pub(crate) const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
 /// Format of the intermediate occlusion buffers (always usable as a storage texture).
 pub(crate) const OCCLUSION_FORMAT: TextureFormat = TextureFormat::R32Float;
-/// Format of the far-field buffer: blendable on every adapter (R32Float blending is optional).
-pub(crate) const FAR_OCCLUSION_FORMAT: TextureFormat = TextureFormat::R16Float;
+/// Format of the far-field visibility buffers: blendable on every adapter (32-bit float blending
+/// is optional). Red: visibility left by the occluders the near field would count but cannot
+/// see; green: by the rest (see `FarFieldBlend::CountOnce`); alpha (sphere occluders): the
+/// largest single occlusion.
+pub(crate) const FAR_OCCLUSION_FORMAT: TextureFormat = TextureFormat::Rgba16Float;
 
 pub(crate) struct ViewPlugin;
 
@@ -169,7 +173,8 @@ impl DynamicAoView {
 /// The uniform every pass of a view reads.
 #[derive(Component, ShaderType, Clone, Copy, Debug, Default)]
 pub(crate) struct DynamicAoUniform {
-    /// r_far, metres.
+    /// Reach of the image-space technique, metres: R, or the near-field radius where the far
+    /// field counts the rest.
     pub radius: f32,
     pub intensity: f32,
     pub max_samples: u32,
@@ -203,6 +208,15 @@ pub(crate) struct DynamicAoUniform {
     pub fields: u32,
     /// 1 when voxel volumes take part.
     pub voxels: u32,
+    /// R, metres: every far-field term counts occluders within this distance.
+    pub far_radius: f32,
+    /// Under [`crate::FarFieldBlend::CountOnce`] with an image-space technique: the near field's
+    /// reach, metres; far-field terms leave out the occluders within it that the ND-buffer holds.
+    /// 0 where the far field counts every occluder.
+    pub far_near_radius: f32,
+    /// 1 when the back-face layer is drawn: the ND-buffer holds the first solid interval of each
+    /// pixel, front layer to back layer, not only the front surface.
+    pub seen_back_layer: u32,
 }
 
 fn extract_views(
@@ -244,11 +258,22 @@ fn extract_views(
         let far_field = ao.spheres && any_spheres && ao.technique != AoTechnique::BevySsao;
         let fields = ao.fields && any_fields && ao.technique != AoTechnique::BevySsao;
         let voxels = ao.voxels && any_volumes && ao.technique != AoTechnique::BevySsao;
+        // Under CountOnce the image-space technique counts what the ND-buffer shows within its
+        // own reach, and the far field everything else within R.
+        let radius = ao.effective_radius();
+        let count_once = image_space
+            && (far_field || fields || voxels)
+            && ao.far_field_blend == FarFieldBlend::CountOnce;
+        let near_radius = if count_once {
+            radius.min(ao.effective_near_field_radius())
+        } else {
+            radius
+        };
+        let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
         entity_commands.insert((
             DynamicAoView {
                 technique: ao.technique,
-                back_layer: (near_field && params.back_layer)
-                    || ao.technique == AoTechnique::RayMarch,
+                back_layer,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
                 far_field,
@@ -259,7 +284,7 @@ fn extract_views(
                 debug_view: ao.debug_view,
             },
             DynamicAoUniform {
-                radius: ao.effective_radius(),
+                radius: near_radius,
                 intensity: ao.effective_intensity(),
                 max_samples: params.max_samples,
                 min_samples: params.min_samples,
@@ -281,6 +306,9 @@ fn extract_views(
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),
                 voxels: u32::from(voxels),
+                far_radius: radius,
+                far_near_radius: if count_once { near_radius } else { 0.0 },
+                seen_back_layer: u32::from(back_layer),
             },
         ));
     }
@@ -298,14 +326,16 @@ pub(crate) struct DynamicAoTextures {
     pub full_occlusion: CachedTexture,
     /// Between the two passes of the blur.
     pub blur_scratch: CachedTexture,
-    /// Summed far-field occlusion of the sphere occluders, full size.
-    pub far_occlusion: CachedTexture,
+    /// Product of the sphere occluders' visibilities, full size.
+    pub sphere_visibility: CachedTexture,
     /// Product of the AO field occluders' visibilities, full size.
     pub field_visibility: CachedTexture,
     /// Voxel occlusion as sampled (half size), and upsampled and filtered (full size); only
     /// while voxel volumes take part.
     pub voxel_low: Option<CachedTexture>,
     pub voxel_occlusion: Option<CachedTexture>,
+    /// Between the two passes of the voxel blur.
+    pub voxel_scratch: Option<CachedTexture>,
 }
 
 fn prepare_view_textures(
@@ -356,23 +386,32 @@ fn prepare_view_textures(
             near_occlusion.clone()
         };
         let half = ((size + 1) / 2).to_extents();
-        let (voxel_low, voxel_occlusion) = if view.voxels {
+        // Voxel occlusion has two channels: the near field's share and the rest.
+        let (voxel_low, voxel_occlusion, voxel_scratch) = if view.voxels {
             (
                 Some(texture(
                     "dynamic_ao_voxel_low",
                     half,
-                    OCCLUSION_FORMAT,
+                    OCCLUSION_PAIR_FORMAT,
                     storage,
                 )),
                 Some(texture(
                     "dynamic_ao_voxel_occlusion",
                     full,
-                    OCCLUSION_FORMAT,
+                    OCCLUSION_PAIR_FORMAT,
                     storage,
                 )),
+                view.voxel_blur.then(|| {
+                    texture(
+                        "dynamic_ao_voxel_scratch",
+                        full,
+                        OCCLUSION_PAIR_FORMAT,
+                        storage,
+                    )
+                }),
             )
         } else {
-            (None, None)
+            (None, None, None)
         };
         commands.entity(entity).insert(DynamicAoTextures {
             back_depth: texture("dynamic_ao_back_depth", full, DEPTH_FORMAT, attachment),
@@ -380,8 +419,8 @@ fn prepare_view_textures(
             near_occlusion,
             full_occlusion,
             blur_scratch: texture("dynamic_ao_blur_scratch", full, OCCLUSION_FORMAT, storage),
-            far_occlusion: texture(
-                "dynamic_ao_far_occlusion",
+            sphere_visibility: texture(
+                "dynamic_ao_sphere_visibility",
                 full,
                 FAR_OCCLUSION_FORMAT,
                 attachment,
@@ -394,6 +433,7 @@ fn prepare_view_textures(
             ),
             voxel_low,
             voxel_occlusion,
+            voxel_scratch,
         });
     }
 }

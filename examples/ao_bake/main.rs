@@ -2,10 +2,14 @@
 //!
 //! ```text
 //! cargo run --release --example ao_bake -- --scene FILE.glb --out-dir DIR \
-//!     [--resolution N] [--epsilon E] [--rays N]
+//!     [--resolution N] [--radius R] [--near-radius N] [--epsilon E] [--rays N]
 //! ```
 //!
-//! Each mesh primitive is baked in its own mesh space (the grid follows the object wherever it is
+//! A field counts occluders within the radius R of the cameras it will be seen by (`--radius`,
+//! metres, default 0.75, the crate's default), with the near field's share within
+//! `--near-radius` (default 0.75); `--epsilon E` bakes the paper's field instead: hits at any
+//! distance, the grid's extent from eq. 4, border rescale and interior fill. Each mesh primitive
+//! is baked in its own mesh space (the grid follows the object wherever it is
 //! placed) into `DIR/<file>_<mesh>_<primitive>.aofield`, with a progress bar on stderr and one
 //! summary line per object on stdout. A missing file, a bad number or a scene without meshes
 //! gives a one-line error and exit code 2 (arguments) or 1 (scene).
@@ -22,11 +26,12 @@ use bevy::asset::{AssetPlugin, LoadState, RecursiveDependencyLoadState};
 use bevy::gltf::{Gltf, GltfMesh};
 use bevy::math::Affine3A;
 use bevy::prelude::*;
-use bevy_dynamic_ao::fields::{BakeSettings, bake};
+use bevy_dynamic_ao::fields::{BakeSettings, FieldReach, bake};
 use bevy_dynamic_ao::reference::scene::TriangleScene;
+use bevy_dynamic_ao::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
 const USAGE: &str = "usage: ao_bake --scene FILE.glb --out-dir DIR [--resolution N] \
-[--epsilon E] [--rays N]";
+[--radius R] [--near-radius N] [--epsilon E] [--rays N]";
 
 /// Frames the glTF file may take to load before the run gives up.
 const LOAD_TIMEOUT_FRAMES: u32 = 2000;
@@ -40,6 +45,16 @@ struct Options {
 fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, String> {
     let (mut scene, mut out_dir) = (None, None);
     let mut settings = BakeSettings::default();
+    let (mut radius, mut near) = (DEFAULT_RADIUS, DEFAULT_NEAR_FIELD_RADIUS);
+    let mut epsilon = None;
+    let distance = |flag: &str, text: String| {
+        text.parse::<f32>()
+            .ok()
+            .filter(|d| d.is_finite() && *d > 0.0)
+            .ok_or(format!(
+                "{flag} takes a positive distance in metres, got '{text}'"
+            ))
+    };
     let mut args = args.into_iter();
     while let Some(flag) = args.next() {
         let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -53,13 +68,16 @@ fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, Stri
                 }
             }
             "--rays" => settings.rays = common::parse_number("--rays", &value()?, 1u32)?,
+            "--radius" => radius = distance("--radius", value()?)?,
+            "--near-radius" => near = distance("--near-radius", value()?)?,
             "--epsilon" => {
                 let text = value()?;
-                settings.epsilon = text
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|e| *e > 0.0 && *e < 1.0)
-                    .ok_or(format!("--epsilon takes a number in (0, 1), got '{text}'"))?;
+                epsilon = Some(
+                    text.parse::<f32>()
+                        .ok()
+                        .filter(|e| *e > 0.0 && *e < 1.0)
+                        .ok_or(format!("--epsilon takes a number in (0, 1), got '{text}'"))?,
+                );
             }
             "--help" | "-h" => {
                 println!("{USAGE}");
@@ -68,6 +86,15 @@ fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, Stri
             other => return Err(format!("unknown argument '{other}' (see --help)")),
         }
     }
+    settings = match epsilon {
+        Some(epsilon) => BakeSettings {
+            reach: FieldReach::Unlimited { epsilon },
+            resolution: settings.resolution,
+            rays: settings.rays,
+            ..BakeSettings::paper()
+        },
+        None => settings.for_camera(radius, near),
+    };
     let scene = scene.ok_or("--scene is required (see --help)")?;
     if !scene.is_file() {
         return Err(format!("scene file {} not found", scene.display()));

@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--half-res] [--far-blend add|max] [--voxel-falloff wendland|none] [--frames N] \
+//!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
@@ -17,14 +17,17 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/far_terms.rs"]
+mod far_terms;
 mod options;
 
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState};
-use bevy::camera::{RenderTarget, primitives::Aabb};
+use bevy::camera::RenderTarget;
 use bevy::gltf::{Gltf, GltfAssetLabel};
 use bevy::prelude::*;
 use bevy::render::{
@@ -33,9 +36,11 @@ use bevy::render::{
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
 use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
-use bevy_dynamic_ao::fields::ActiveAoField;
+use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
 use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
+use bevy_dynamic_ao::reference::posed::posed_triangles_of;
 use options::{FarTerm, Options};
 
 /// Frames a scene may take to load before the run gives up.
@@ -83,6 +88,8 @@ fn main() {
         color_done: false,
         failure: None,
         volume: None,
+        stage_start: 0,
+        placing: None,
     })
     .add_systems(Startup, load_scene)
     .add_systems(Update, (place_volume, drive).chain());
@@ -112,8 +119,12 @@ struct Capture {
     visibility: Option<Vec<f32>>,
     color_done: bool,
     failure: Option<String>,
-    /// The voxel volume of `--technique voxels`, once the scene's bounds are known.
+    /// The voxel volume of `--technique voxels`, once the view's surfaces are known.
     volume: Option<Entity>,
+    /// The frame rendering began.
+    stage_start: u32,
+    /// The read-back of the front ND layer the voxel volume is placed from, while it runs.
+    placing: Option<Arc<Mutex<Option<Vec<u8>>>>>,
 }
 
 fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
@@ -189,19 +200,14 @@ fn scene_ready(
         },
         readback.clone(),
     ));
-    if options.far == Some(FarTerm::Fields) {
-        // Baked on load (or read from the disk cache) for every mesh, in its own space.
-        for entity in children.iter_descendants(ready.entity) {
-            if meshes.contains(entity) {
-                commands.entity(entity).insert(AoField::default());
-            }
-        }
-    }
-    if options.far == Some(FarTerm::Spheres) {
-        // On the root, so every mesh of the scene casts far-field occlusion.
-        commands
-            .entity(ready.entity)
-            .insert(SphereOccluder::default());
+    if let Some(term @ (FarTerm::Fields | FarTerm::Spheres)) = options.far {
+        // Every mesh of the scene an occluder (fields are baked on load, or read from the disk
+        // cache, each in its mesh's own space).
+        let scene_meshes: Vec<Entity> = children
+            .iter_descendants(ready.entity)
+            .filter(|e| meshes.contains(*e))
+            .collect();
+        term.attach(&mut commands, &scene_meshes, (Vec3::ZERO, Vec3::ZERO), 0.0);
     }
     capture.readback = Some(readback);
 
@@ -225,61 +231,89 @@ fn scene_ready(
     }
     let until = capture.frames + capture.options.frames;
     capture.stage = Stage::Rendering { until };
+    capture.stage_start = capture.frames;
 }
 
-/// `--technique voxels`: one volume around every mesh of the scene, grown by the radius so
-/// occluders at its rim still reach the surfaces inside, with d_max the radius.
-fn place_volume(
-    mut commands: Commands,
-    mut capture: ResMut<Capture>,
-    children: Query<&Children>,
-    meshes: Query<(Option<&Aabb>, &GlobalTransform), With<Mesh3d>>,
-) {
-    let (Stage::Rendering { .. }, Some(FarTerm::Voxels), None, Some(root)) = (
+/// Frames rendered before the view's surfaces are read to place the voxel volume.
+const FRAMES_BEFORE_PLACING: u32 = 3;
+
+/// `--technique voxels`: one volume over the scene's bounds cut down to the surfaces the camera
+/// sees, grown by the radius (only occluders that close can reach them), so its cells are as fine
+/// as the view allows; its rays reach as far as the radius. The view's surfaces come from the
+/// front layer of the ND-buffer after a few frames.
+fn place_volume(world: &mut World) {
+    let capture = world.resource::<Capture>();
+    let (Stage::Rendering { .. }, Some(FarTerm::Voxels), None, Some(root), Some(readback)) = (
         capture.stage,
         capture.options.far,
         capture.volume,
         capture.root,
+        capture.readback.clone(),
     ) else {
         return;
     };
-    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for entity in children.iter_descendants(root) {
-        let Ok((aabb, transform)) = meshes.get(entity) else {
-            continue;
-        };
-        let Some(aabb) = aabb else {
-            return;
-        };
-        for corner in 0..8 {
-            let pick = |bit: u32, axis: usize| {
-                if corner & bit == 0 {
-                    aabb.min()[axis]
-                } else {
-                    aabb.max()[axis]
-                }
-            };
-            let p = transform.transform_point(Vec3::new(pick(1, 0), pick(2, 1), pick(4, 2)));
-            lo = lo.min(p);
-            hi = hi.max(p);
+    let Some(placing) = capture.placing.clone() else {
+        if capture.frames >= capture.stage_start + FRAMES_BEFORE_PLACING {
+            let front: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
+            let store = front.clone();
+            world
+                .spawn(Readback::texture(readback.front.clone()))
+                .observe(move |done: On<ReadbackComplete>, mut commands: Commands| {
+                    *store.lock().unwrap() = Some(done.data.clone());
+                    commands.entity(done.entity).despawn();
+                });
+            world.resource_mut::<Capture>().placing = Some(front);
         }
+        return;
+    };
+    let Some(bytes) = placing.lock().unwrap().take() else {
+        return;
+    };
+    let (width, height) = (capture.options.width, capture.options.height);
+    let radius = capture.options.radius;
+    let falloff = capture.options.voxel_falloff;
+    let texels: Vec<NdTexel> = common::unpad_f32(&bytes, width as usize, height as usize, 4)
+        .chunks_exact(4)
+        .map(|c| NdTexel::from_rgba([c[0], c[1], c[2], c[3]]))
+        .collect();
+    let mut below = vec![root];
+    let mut i = 0;
+    while i < below.len() {
+        if let Some(children) = world.get::<Children>(below[i]) {
+            below.extend(children.iter());
+        }
+        i += 1;
     }
+    let scene = posed_triangles_of(world, |e| below.contains(&e));
+    let (lo, hi) = scene.bounds();
     if !lo.is_finite() || !hi.is_finite() {
+        world.resource_mut::<Capture>().failure = Some("the scene has no triangles".into());
         return;
     }
-    let radius = capture.options.radius;
-    let volume = commands
-        .spawn((
-            Transform::from_translation((lo + hi) / 2.0),
-            VoxelAoVolume {
-                half_extents: (hi - lo) / 2.0 + radius,
-                d_max: radius,
-                falloff: capture.options.voxel_falloff,
-                ..default()
-            },
-        ))
-        .id();
-    capture.volume = Some(volume);
+    let view = world
+        .query_filtered::<(&GlobalTransform, &Camera), With<AoReadback>>()
+        .iter(world)
+        .next()
+        .map(|(transform, camera)| {
+            ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
+        });
+    let visible = view.and_then(|view| far_terms::visible_bounds(&texels, width, height, &view));
+    let region = far_terms::voxel_region((lo, hi), visible, radius);
+    let meshes: Vec<Entity> = below
+        .iter()
+        .copied()
+        .filter(|e| world.get::<Mesh3d>(*e).is_some())
+        .collect();
+    let mut commands = world.commands();
+    let volume = FarTerm::Voxels.attach(&mut commands, &meshes, region, radius);
+    world.flush();
+    if let Some(volume) = volume
+        && let Some(mut settings) = world.get_mut::<VoxelAoVolume>(volume)
+    {
+        settings.falloff = falloff;
+    }
+    let mut capture = world.resource_mut::<Capture>();
+    capture.volume = volume;
     // The frames to render start now that the volume exists.
     capture.stage = Stage::Rendering {
         until: capture.frames + capture.options.frames,
@@ -290,7 +324,7 @@ fn drive(
     mut commands: Commands,
     mut capture: ResMut<Capture>,
     assets: Res<AssetServer>,
-    fields: Query<Has<ActiveAoField>, With<AoField>>,
+    fields: Query<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
@@ -324,7 +358,7 @@ fn drive(
                 exit.write(AppExit::error());
             }
         }
-        Stage::Rendering { .. } if fields.iter().any(|active| !active) => {
+        Stage::Rendering { .. } if fields.iter().any(|(active, pending)| !active || pending) => {
             // Fields still baking: the capture waits for them, within the load time limit.
             if capture.frames > LOAD_TIMEOUT_FRAMES {
                 eprintln!("ao_capture: the AO fields were not baked in time");

@@ -6,42 +6,15 @@ use bevy_dynamic_ao::voxels::VoxelFalloff;
 use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique, FarFieldBlend};
 
 use crate::common::parse_number;
+pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend add|max] \
-[--voxel-falloff wendland|none] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
 const MAX_SIZE: u32 = 8192;
-
-/// The far-field terms: alone they are the whole occlusion, after `+` they join an image-space
-/// technique.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FarTerm {
-    /// Spheres on every mesh of the scene.
-    Spheres,
-    /// An AO field baked for every mesh of the scene.
-    Fields,
-    /// One voxel volume around the whole scene, grown by the radius.
-    Voxels,
-}
-
-impl FarTerm {
-    const ALL: [Self; 3] = [Self::Spheres, Self::Fields, Self::Voxels];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Spheres => "spheres",
-            Self::Fields => "fields",
-            Self::Voxels => "voxels",
-        }
-    }
-
-    fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|term| term.name() == name)
-    }
-}
 
 /// Every name `--technique` takes: the plugin's techniques, each far-field term alone, and each
 /// image-space technique with a far-field term added.
@@ -122,8 +95,8 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
-        let mut far_blend = FarFieldBlend::Add;
-        let mut voxel_falloff = VoxelFalloff::Wendland;
+        let mut far_blend = FarFieldBlend::default();
+        let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color) = (None, None);
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -162,21 +135,18 @@ impl Options {
                 }
                 "--half-res" => half_resolution = true,
                 "--far-blend" => {
-                    far_blend = match value()?.as_str() {
-                        "add" => FarFieldBlend::Add,
-                        "max" => FarFieldBlend::Max,
-                        other => {
-                            return Err(format!("--far-blend takes add or max, got '{other}'"));
-                        }
-                    }
+                    let name = value()?;
+                    far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
+                        "--far-blend takes count-once, add or max, got '{name}'"
+                    ))?;
                 }
                 "--voxel-falloff" => {
                     voxel_falloff = match value()?.as_str() {
-                        "wendland" => VoxelFalloff::Wendland,
                         "none" => VoxelFalloff::None,
+                        "wendland" => VoxelFalloff::Wendland,
                         other => {
                             return Err(format!(
-                                "--voxel-falloff takes wendland or none, got '{other}'"
+                                "--voxel-falloff takes none or wendland, got '{other}'"
                             ));
                         }
                     }

@@ -147,7 +147,8 @@ fn skin_mesh(bones: &[Bone]) -> Skin {
                 let a = first + r * SEGMENTS as u32 + k;
                 let b2 = first + r * SEGMENTS as u32 + (k + 1) % SEGMENTS as u32;
                 let (c, d) = (a + SEGMENTS as u32, b2 + SEGMENTS as u32);
-                m.indices.extend([a, c, b2, b2, c, d]);
+                // Counter-clockwise seen from outside: the walls face out.
+                m.indices.extend([a, b2, c, b2, d, c]);
             }
         }
         // Caps: a centre vertex per end, fanned to its ring.

@@ -21,7 +21,7 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
 [--width W] [--height H] [--characters N] [--show-spheres] [--voxels] [--show-voxels] [--debug-view]
-keys: N near field on/off, F far field (spheres) on/off, V voxel volumes on/off, M add/max blend,
+keys: N near field on/off, F far field (spheres) on/off, V voxel volumes on/off, M blend (count once/add/max),
       S show spheres, O show occupied voxels, D debug view, Esc quit";
 
 const WALKER: &str = "characters/walker.glb";
@@ -193,7 +193,6 @@ fn setup(world: &mut World) {
                     // Cells of 1.6 × 2.2 × 1.6 cm: finer than the gap between arm and body,
                     // which coarser cells close (rays then start inside the arm).
                     resolution: 96,
-                    d_max: 0.6,
                     ..default()
                 },
             ));
@@ -275,8 +274,9 @@ fn controls(
         }
         if keys.just_pressed(KeyCode::KeyM) {
             ao.far_field_blend = match ao.far_field_blend {
+                FarFieldBlend::CountOnce => FarFieldBlend::Add,
                 FarFieldBlend::Add => FarFieldBlend::Max,
-                FarFieldBlend::Max => FarFieldBlend::Add,
+                FarFieldBlend::Max => FarFieldBlend::CountOnce,
             };
         }
     }
@@ -298,7 +298,7 @@ fn show_settings(
     text.0 = format!(
         "near field {} | spheres {} ({spheres}, {:?}) | voxels {} ({} volumes) | show spheres {} \
          | show voxels {} | debug view {}\n\
-         N near field  F spheres  V voxels  M add/max blend  S show spheres  O show voxels  \
+         N near field  F spheres  V voxels  M blend (count once/add/max)  S show spheres  O show voxels  \
          D debug view  Esc quit",
         on(ao.technique != AoTechnique::Off),
         on(ao.spheres),

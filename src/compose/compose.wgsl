@@ -1,13 +1,25 @@
-// Combined ambient occlusion (Shanmugam & Arikan 2007, §6; Reinbothe et al. 2009, §4): the
-// terms add and clamp (or, on
-// request, the larger one wins), and the result is handed to Bevy's PBR lighting as visibility,
-// 1 − occlusion.
+// Combined ambient occlusion, handed to Bevy's PBR lighting as visibility, 1 − occlusion.
+//
+// Every far-field term arrives in two channels: red, the occluders within the near field's reach
+// that the ND-buffer does not hold (so the near field misses them); green, the occluders beyond
+// that reach (under `FarFieldBlend::CountOnce`; with the other blends everything is in green).
+// Spheres and AO fields arrive as visibilities, the products over their occluders (Malmer et al.
+// §3.3.2); voxel volumes (Reinbothe et al. §4) as occlusion. Per channel the terms join as
+// independent occluders, 1 − Π(1 − term). Sphere occluders' proxies are not independent: parts of
+// one object stand one behind another as a receiver sees them (a character's arm before its
+// torso), and the product counts the hidden part too; their union is taken halfway between the
+// largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
+// rule measured against ray-traced proxies (see `spheres`). Counted once: within the near field's reach the larger
+// of the near field and the red channel counts, because what the ND-buffer misses is most often
+// the hidden side of what it shows (the two cover the same directions); beyond it, the green
+// channel joins as an independent occluder. `Add` adds the near and far terms and clamps
+// (Shanmugam & Arikan 2007, §6); `Max` takes the larger.
 
 #import bevy_dynamic_ao::settings::DynamicAoSettings
 
 @group(0) @binding(0) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
-@group(0) @binding(2) var far_occlusion: texture_2d<f32>;
+@group(0) @binding(2) var sphere_visibility: texture_2d<f32>;
 @group(0) @binding(3) var field_visibility: texture_2d<f32>;
 @group(0) @binding(4) var voxel_occlusion: texture_2d<f32>;
 #ifdef VISIBILITY_R16FLOAT
@@ -16,6 +28,17 @@
 @group(0) @binding(5) var visibility: texture_storage_2d<r32float, write>;
 #endif
 
+// Both channels of the proxies' product `occlusion` scaled so that their total is halfway
+// between the largest single proxy's occlusion and the product's total.
+fn sphere_union(occlusion: vec2<f32>, largest: f32) -> vec2<f32> {
+    let product = 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y);
+    if product <= 0.0 {
+        return occlusion;
+    }
+    let together = min(largest, product) + 0.5 * (product - min(largest, product));
+    return occlusion * (together / product);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     let dims = textureDimensions(visibility);
@@ -23,28 +46,36 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel = vec2<i32>(id.xy);
-    var occlusion = 0.0;
+    var near = 0.0;
     if settings.near_field != 0u {
-        occlusion += textureLoad(near_occlusion, pixel, 0).r;
+        near = clamp(textureLoad(near_occlusion, pixel, 0).r, 0.0, 1.0);
     }
-    // The far terms: sphere occlusion adds (S&A §6); AO fields arrive as the product of their
-    // occluders' visibilities (Malmer et al. §3.3.2) and join as one more far occluder.
-    var far = 0.0;
+    // Per channel: what the far-field occluders leave open.
+    var open = vec2<f32>(1.0);
     if settings.far_field != 0u {
-        far += textureLoad(far_occlusion, pixel, 0).r;
+        let spheres = textureLoad(sphere_visibility, pixel, 0);
+        open *= 1.0 - sphere_union(1.0 - spheres.rg, spheres.a);
     }
     if settings.fields != 0u {
-        far += 1.0 - textureLoad(field_visibility, pixel, 0).r;
+        open *= textureLoad(field_visibility, pixel, 0).rg;
     }
-    // Voxel volumes (Reinbothe et al. 2009) are one more far term, already filtered.
     if settings.voxels != 0u {
-        far += textureLoad(voxel_occlusion, pixel, 0).r;
+        open *= 1.0 - textureLoad(voxel_occlusion, pixel, 0).rg;
     }
+    let far = 1.0 - clamp(open, vec2<f32>(0.0), vec2<f32>(1.0));
+    var occlusion = near;
     if settings.far_field != 0u || settings.fields != 0u || settings.voxels != 0u {
-        if settings.far_field_blend == 1u {
-            occlusion = max(occlusion, far);
-        } else {
-            occlusion += far;
+        let all_far = 1.0 - (1.0 - far.x) * (1.0 - far.y);
+        switch settings.far_field_blend {
+            case 0u: {
+                occlusion = near + all_far;
+            }
+            case 1u: {
+                occlusion = max(near, all_far);
+            }
+            default: {
+                occlusion = 1.0 - (1.0 - max(near, far.x)) * (1.0 - far.y);
+            }
         }
     }
     textureStore(visibility, pixel, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));

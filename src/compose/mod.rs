@@ -1,7 +1,9 @@
 //! Combining the occlusion terms and handing the result to Bevy's PBR lighting.
 //!
-//! Near and far terms add and clamp (Shanmugam & Arikan 2007, §6); this pass writes the
-//! result as **visibility** (1 = open) into the texture Bevy binds for its own SSAO
+//! Near and far terms combine as [`FarFieldBlend`](crate::FarFieldBlend) says (by default each
+//! occluder counted once: within the near field's reach the larger of the near field and what
+//! the far field adds that the ND-buffer misses, beyond it the far field as an independent
+//! occluder; `compose.wgsl` says why); this pass writes the result as **visibility** (1 = open) into the texture Bevy binds for its own SSAO
 //! (`ScreenSpaceAmbientOcclusionResources::screen_space_ambient_occlusion_texture`, mesh view
 //! binding 17). Bevy's PBR shader applies that texture to ambient/indirect diffuse light and
 //! environment specular only, so direct lights are never darkened. Bevy's own SSAO pass is
@@ -101,8 +103,8 @@ fn hand_over_from_bevy_ssao(
             AoTechnique::BevySsao => false,
             technique => image_space.pipeline(technique).is_some_and(ready),
         };
-        let filter = (view.blur_radius == 0 || (ready(blur.x) && ready(blur.y)))
-            && (!view.half_resolution || ready(blur.upsample));
+        let filter = (view.blur_radius == 0 || (ready(blur.one.x) && ready(blur.one.y)))
+            && (!view.half_resolution || ready(blur.one.upsample));
         let far_field =
             !view.far_field || pipeline_cache.get_render_pipeline(splat.pipeline).is_some();
         let field_pipeline = match view.field_shading {
@@ -112,11 +114,7 @@ fn hand_over_from_bevy_ssao(
         let fields_ready =
             !view.fields || pipeline_cache.get_render_pipeline(field_pipeline).is_some();
         let voxels_ready = !view.voxels
-            || (ready(voxels.voxelize)
-                && ready(voxels.sample)
-                && ready(blur.upsample)
-                && ready(blur.x)
-                && ready(blur.y));
+            || (ready(voxels.voxelize) && ready(voxels.sample) && blur.two.ready(&pipeline_cache));
         if technique
             && filter
             && far_field

@@ -97,13 +97,13 @@ pub(crate) fn prepare_compose_bind_groups(
             &BindGroupEntries::sequential((
                 settings_binding.clone(),
                 &textures.full_occlusion.default_view,
-                &textures.far_occlusion.default_view,
+                &textures.sphere_visibility.default_view,
                 &textures.field_visibility.default_view,
                 // Without voxels nothing reads this binding; any float texture of the view fits.
                 &textures
                     .voxel_occlusion
                     .as_ref()
-                    .unwrap_or(&textures.far_occlusion)
+                    .unwrap_or(&textures.sphere_visibility)
                     .default_view,
                 &ssao.screen_space_ambient_occlusion_texture.default_view,
             )),

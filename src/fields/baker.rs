@@ -2,6 +2,13 @@
 //! grid point against the object's triangles (the [`reference`](crate::reference) BVH), in
 //! parallel over slices of the grid, with the same directions everywhere so the result does not
 //! depend on the number of threads.
+//!
+//! Every grid point stores the occlusion and average occluded direction twice: for hits within
+//! the reach (the camera's radius R) and within the near field's reach, so that the far field can
+//! leave to the near field what it counts (see `FarFieldBlend::CountOnce`). It also stores its
+//! signed distance to the object, so that the lookup never blends values from inside the object
+//! or from the far side of a thin one into a point on its surface, and leaves the object's own
+//! surface to the near field.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -9,23 +16,48 @@ use bevy::math::{UVec3, Vec3};
 
 use super::format::{AoFieldData, MAX_RESOLUTION};
 use crate::reference::bvh::Bvh;
-use crate::reference::scene::Triangle;
+use crate::reference::scene::{Triangle, triangle_bounds};
+use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
+
+/// How far a field's occlusion reaches, which also sets its grid's extent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FieldReach {
+    /// The radius of the cameras that show the field ([`DynamicAo::radius`](crate::DynamicAo::radius),
+    /// the largest among them) and their near-field radius: the field is baked again, in the
+    /// background, when they change. Baked outside an app (`ao_bake`), the crate's defaults.
+    CameraRadius,
+    /// Hits within `reach` metres, with the near field's share within `near` metres.
+    Distance {
+        /// R, metres, > 0.
+        reach: f32,
+        /// The near field's reach, metres, in (0, reach].
+        near: f32,
+    },
+    /// Hits at any distance, the paper's; the grid's extent follows eq. 4 with this ε ∈ (0, 1)
+    /// (0.1 in the paper: about three times the object's half size), and occlusion beyond it
+    /// is dropped.
+    Unlimited {
+        /// ε of eq. 4.
+        epsilon: f32,
+    },
+}
 
 /// How to bake a field.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeSettings {
-    /// Grid cells per axis. Range 2 to 256. Default 32.
+    /// Grid cells along the longest side of the grid box; the other sides get cells of about
+    /// the same size, within a budget of `resolution`³ cells. Range 2 to 256. Default 32.
     pub resolution: u32,
-    /// ε of eq. 4: occlusion below this is neglected, which sets the grid's extent. Range
-    /// (0, 1). Default 0.1, the paper's value (about three times the object's half size).
-    pub epsilon: f32,
+    /// How far occlusion counts. Default [`FieldReach::CameraRadius`].
+    pub reach: FieldReach,
     /// Rays per grid point over the whole sphere. Default 256.
     pub rays: u32,
     /// Rescale values so the largest one on the grid's boundary becomes 0 (§3.4.1): no visible
-    /// edge where the field ends. Default `true`.
+    /// edge where an unlimited field ends. It lowers every value up to 0.3. Default `false`: a
+    /// field with a finite reach is 0 at its boundary already.
     pub rescale_border: bool,
     /// Replace fully occluded cells (inside the object) by the mean of their open neighbours
-    /// (§3.4.2), so interpolation at the surface reads sensible values. Default `true`.
+    /// (§3.4.2). Default `false`: the lookup skips cells inside the object.
     pub fill_interior: bool,
 }
 
@@ -33,10 +65,47 @@ impl Default for BakeSettings {
     fn default() -> Self {
         Self {
             resolution: 32,
-            epsilon: 0.1,
+            reach: FieldReach::CameraRadius,
             rays: 256,
+            rescale_border: false,
+            fill_interior: false,
+        }
+    }
+}
+
+impl BakeSettings {
+    #[cfg(test)]
+    fn without_fixes(self) -> Self {
+        Self {
+            rescale_border: false,
+            fill_interior: false,
+            ..self
+        }
+    }
+
+    /// The paper's settings: hits at any distance, the grid extent of eq. 4 with ε = 0.1, the
+    /// border rescale and the interior fill.
+    pub fn paper() -> Self {
+        Self {
+            reach: FieldReach::Unlimited { epsilon: 0.1 },
             rescale_border: true,
             fill_interior: true,
+            ..Self::default()
+        }
+    }
+
+    /// These settings with [`FieldReach::CameraRadius`] made concrete for a camera of this radius
+    /// and near-field reach (metres).
+    pub fn for_camera(self, radius: f32, near: f32) -> Self {
+        match self.reach {
+            FieldReach::CameraRadius => Self {
+                reach: FieldReach::Distance {
+                    reach: radius,
+                    near: near.min(radius),
+                },
+                ..self
+            },
+            _ => self,
         }
     }
 }
@@ -71,6 +140,20 @@ pub fn grid_box(min: Vec3, max: Vec3, epsilon: f32) -> (Vec3, Vec3) {
     ((min + max) * 0.5, e)
 }
 
+/// Cells per axis for a grid box of `half_extent`: about cubic cells, `resolution` along the
+/// longest side at most, `resolution`³ in all at most, and at least 2 per axis.
+pub fn grid_resolution(half_extent: Vec3, resolution: u32) -> UVec3 {
+    let budget = (resolution as f32).powi(3);
+    let e = half_extent.max(Vec3::splat(1e-6 * half_extent.max_element().max(1e-6)));
+    let k = (budget / (e.x * e.y * e.z)).cbrt();
+    let longest = resolution as f32 / e.max_element();
+    let per_unit = k.min(longest * 2.0);
+    (e * per_unit).round().as_uvec3().clamp(
+        UVec3::splat(2),
+        UVec3::splat(MAX_RESOLUTION.min(resolution * 4).max(2)),
+    )
+}
+
 /// `count` directions spread evenly over the unit sphere (a Fibonacci lattice).
 fn sphere_directions(count: u32) -> Vec<Vec3> {
     let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
@@ -84,8 +167,9 @@ fn sphere_directions(count: u32) -> Vec<Vec3> {
         .collect()
 }
 
-/// Bakes the field of `triangles` (mesh space). `progress(done, total)` is called as slices of
-/// the grid finish, from the baking threads.
+/// Bakes the field of `triangles` (mesh space). [`FieldReach::CameraRadius`] bakes for the
+/// crate's default radius; the plugin resolves it with [`BakeSettings::for_camera`] first.
+/// `progress(done, total)` is called as slices of the grid finish, from the baking threads.
 pub fn bake(
     triangles: Vec<Triangle>,
     settings: &BakeSettings,
@@ -97,11 +181,21 @@ pub fn bake(
             settings.resolution
         )));
     }
-    if !(settings.epsilon > 0.0 && settings.epsilon < 1.0) {
-        return Err(BakeError::BadSettings(format!(
-            "epsilon {} is outside (0, 1)",
-            settings.epsilon
-        )));
+    let settings = settings.for_camera(DEFAULT_RADIUS, DEFAULT_NEAR_FIELD_RADIUS);
+    match settings.reach {
+        FieldReach::Unlimited { epsilon } if !(epsilon > 0.0 && epsilon < 1.0) => {
+            return Err(BakeError::BadSettings(format!(
+                "epsilon {epsilon} is outside (0, 1)"
+            )));
+        }
+        FieldReach::Distance { reach, near }
+            if !(reach.is_finite() && reach > 0.0 && near.is_finite() && near > 0.0) =>
+        {
+            return Err(BakeError::BadSettings(format!(
+                "reach {reach} m and near reach {near} m must be positive distances"
+            )));
+        }
+        _ => {}
     }
     if settings.rays == 0 {
         return Err(BakeError::BadSettings("rays must be at least 1".into()));
@@ -116,28 +210,40 @@ pub fn bake(
     if triangles.is_empty() {
         return Err(BakeError::NoTriangles);
     }
-    let (min, max) = triangles
-        .iter()
-        .flat_map(|t| t.vertices)
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    let (center, half_extent) = grid_box(min, max, settings.epsilon);
-    let resolution = UVec3::splat(settings.resolution);
+    let (min, max) = triangle_bounds(&triangles);
+    let (center, half_extent, reach, near) = match settings.reach {
+        FieldReach::Distance { reach, near } => (
+            (min + max) * 0.5,
+            // Beyond the object's bounds grown by the reach no ray meets it: the field is 0.
+            (max - min) * 0.5 + Vec3::splat(reach),
+            reach,
+            near.min(reach),
+        ),
+        FieldReach::Unlimited { epsilon } => {
+            let (center, e) = grid_box(min, max, epsilon);
+            (center, e, f32::INFINITY, f32::INFINITY)
+        }
+        FieldReach::CameraRadius => unreachable!("resolved above"),
+    };
+    let resolution = grid_resolution(half_extent, settings.resolution);
     let bvh = Bvh::new(triangles);
     let directions = sphere_directions(settings.rays);
     let cell_size = 2.0 * half_extent / resolution.as_vec3();
     let origin = center - half_extent;
+    let miss = 2.0 * half_extent.length();
 
-    let n = settings.resolution as usize;
-    let mut cells = vec![[0.0f32; 4]; n * n * n];
+    let (nx, ny, nz) = (
+        resolution.x as usize,
+        resolution.y as usize,
+        resolution.z as usize,
+    );
+    let mut cells = vec![Cell::default(); nx * ny * nz];
     let done = AtomicUsize::new(0);
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
-    let slice = n * n;
+    let slice = nx * ny;
     std::thread::scope(|scope| {
         // Interleaved slices keep the threads busy when the object fills only part of the grid.
-        let mut chunks: Vec<Vec<(usize, &mut [[f32; 4]])>> =
-            (0..threads).map(|_| Vec::new()).collect();
+        let mut chunks: Vec<Vec<(usize, &mut [Cell])>> = (0..threads).map(|_| Vec::new()).collect();
         for (z, chunk) in cells.chunks_mut(slice).enumerate() {
             chunks[z % threads].push((z, chunk));
         }
@@ -145,24 +251,35 @@ pub fn bake(
             let (bvh, directions, done) = (&bvh, &directions, &done);
             scope.spawn(move || {
                 for (z, chunk) in work {
-                    for y in 0..n {
-                        for x in 0..n {
+                    for y in 0..ny {
+                        for x in 0..nx {
                             let p = origin
                                 + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell_size;
-                            chunk[y * n + x] = sample(bvh, directions, p);
+                            chunk[y * nx + x] = sample(bvh, directions, p, reach, near, miss);
                         }
                     }
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1, n);
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1, nz);
                 }
             });
         }
     });
 
+    let finite = |d: f32| if d.is_finite() { d } else { 0.0 };
     let mut field = AoFieldData {
         resolution,
         center,
         half_extent,
-        cells,
+        reach: finite(reach),
+        near_reach: finite(near),
+        cells: cells.iter().map(|c| c.far).collect(),
+        near_cells: cells.iter().map(|c| c.near).collect(),
+        distances: cells
+            .iter()
+            .map(|c| {
+                let o = c.near_offset;
+                [c.signed_distance, o.x, o.y, o.z]
+            })
+            .collect(),
     };
     if settings.fill_interior {
         fill_interior(&mut field);
@@ -173,20 +290,61 @@ pub fn bake(
     Ok(field)
 }
 
+/// What one grid point stores.
+#[derive(Clone, Copy, Default)]
+struct Cell {
+    far: [f32; 4],
+    near: [f32; 4],
+    signed_distance: f32,
+    near_offset: Vec3,
+}
+
 /// Occlusion (eq. 2: the blocked fraction of all directions) and average occluded direction at
-/// `p`.
-fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3) -> [f32; 4] {
-    let mut blocked = 0u32;
-    let mut sum = Vec3::ZERO;
+/// `p`, for hits within `reach` and within `near`; the signed distance to the surface (the
+/// nearest hit, negative where most hits meet back faces: inside a closed object or behind a
+/// one-sided one; `miss` where nothing is hit) and the mean offset to the near hits: a point on
+/// (or within) the part of the object the near rays meet.
+fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3, reach: f32, near: f32, miss: f32) -> Cell {
+    let (mut far_count, mut near_count) = (0u32, 0u32);
+    let (mut far_sum, mut near_sum) = (Vec3::ZERO, Vec3::ZERO);
+    let (mut nearest, mut near_offset, mut back, mut front) =
+        (f32::INFINITY, Vec3::ZERO, 0u32, 0u32);
     for &d in directions {
-        if bvh.any_hit(p, d, 0.0, f32::INFINITY) {
-            blocked += 1;
-            sum += d;
+        let Some(hit) = bvh.closest_hit(p, d, 0.0, f32::INFINITY) else {
+            continue;
+        };
+        nearest = nearest.min(hit.t);
+        if bvh.triangles()[hit.triangle].face_normal().dot(d) > 0.0 {
+            back += 1;
+        } else {
+            front += 1;
+        }
+        if hit.t < reach {
+            far_count += 1;
+            far_sum += d;
+        }
+        if hit.t < near {
+            near_count += 1;
+            near_sum += d;
+            near_offset += d * hit.t;
         }
     }
-    let a = blocked as f32 / directions.len() as f32;
-    let d = sum.normalize_or_zero();
-    [a, d.x, d.y, d.z]
+    let rays = directions.len() as f32;
+    let cone = |count: u32, sum: Vec3| {
+        let d = sum.normalize_or_zero();
+        [count as f32 / rays, d.x, d.y, d.z]
+    };
+    let distance = if nearest.is_finite() { nearest } else { miss };
+    Cell {
+        far: cone(far_count, far_sum),
+        near: cone(near_count, near_sum),
+        signed_distance: if back > front { -distance } else { distance },
+        near_offset: if near_count > 0 {
+            near_offset / near_count as f32
+        } else {
+            Vec3::ZERO
+        },
+    }
 }
 
 /// §3.4.2: cells inside the object (every ray blocked) take the mean of their neighbours that
@@ -194,34 +352,38 @@ fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3) -> [f32; 4] {
 /// One pass, as in the paper: cells deeper inside keep 1, and no surface point reads them.
 pub fn fill_interior(field: &mut AoFieldData) {
     let r = field.resolution.as_ivec3();
-    let original = field.cells.clone();
-    for z in 0..r.z {
-        for y in 0..r.y {
-            for x in 0..r.x {
-                let i = field.index(x as u32, y as u32, z as u32);
-                if original[i][0] < 1.0 {
-                    continue;
-                }
-                let (mut sum, mut dir, mut count) = (0.0, Vec3::ZERO, 0);
-                for dz in -1..=1 {
-                    for dy in -1..=1 {
-                        for dx in -1..=1 {
-                            let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-                            if nx < 0 || ny < 0 || nz < 0 || nx >= r.x || ny >= r.y || nz >= r.z {
-                                continue;
-                            }
-                            let c = original[field.index(nx as u32, ny as u32, nz as u32)];
-                            if c[0] < 1.0 {
-                                sum += c[0];
-                                dir += Vec3::new(c[1], c[2], c[3]);
-                                count += 1;
+    for layer in [&mut field.cells, &mut field.near_cells] {
+        let original = layer.clone();
+        let index = |x: i32, y: i32, z: i32| ((z * r.y + y) * r.x + x) as usize;
+        for z in 0..r.z {
+            for y in 0..r.y {
+                for x in 0..r.x {
+                    let i = index(x, y, z);
+                    if original[i][0] < 1.0 {
+                        continue;
+                    }
+                    let (mut sum, mut dir, mut count) = (0.0, Vec3::ZERO, 0);
+                    for dz in -1..=1 {
+                        for dy in -1..=1 {
+                            for dx in -1..=1 {
+                                let (nx, ny, nz) = (x + dx, y + dy, z + dz);
+                                if nx < 0 || ny < 0 || nz < 0 || nx >= r.x || ny >= r.y || nz >= r.z
+                                {
+                                    continue;
+                                }
+                                let c = original[index(nx, ny, nz)];
+                                if c[0] < 1.0 {
+                                    sum += c[0];
+                                    dir += Vec3::new(c[1], c[2], c[3]);
+                                    count += 1;
+                                }
                             }
                         }
                     }
-                }
-                if count > 0 {
-                    let d = dir.normalize_or_zero();
-                    field.cells[i] = [sum / count as f32, d.x, d.y, d.z];
+                    if count > 0 {
+                        let d = dir.normalize_or_zero();
+                        layer[i] = [sum / count as f32, d.x, d.y, d.z];
+                    }
                 }
             }
         }
@@ -250,7 +412,7 @@ pub fn rescale_border(field: &mut AoFieldData) {
         }
     }
     let vm = boundary_max.min(RESCALE_LIMIT - 0.01);
-    for cell in &mut field.cells {
+    for cell in field.cells.iter_mut().chain(&mut field.near_cells) {
         if cell[0] <= RESCALE_LIMIT {
             cell[0] = (RESCALE_LIMIT * (cell[0] - vm) / (RESCALE_LIMIT - vm)).max(0.0);
         }
@@ -328,10 +490,9 @@ mod tests {
         let settings = BakeSettings {
             resolution: 8,
             rays: 1024,
-            rescale_border: false,
-            fill_interior: false,
-            ..default()
-        };
+            ..BakeSettings::paper()
+        }
+        .without_fixes();
         let triangles = cube();
         let field = bake(triangles.clone(), &settings, &|_, _| {}).unwrap();
         let cell = 2.0 * field.half_extent / 8.0;
@@ -366,7 +527,7 @@ mod tests {
         let settings = BakeSettings {
             resolution: 12,
             rays: 256,
-            ..default()
+            ..BakeSettings::paper()
         };
         let field = bake(cube(), &settings, &|_, _| {}).unwrap();
         let r = field.resolution;
@@ -411,7 +572,7 @@ mod tests {
             resolution: 8,
             rays: 128,
             rescale_border: false,
-            ..default()
+            ..BakeSettings::paper()
         };
         let filled = bake(cube(), &settings, &|_, _| {}).unwrap();
         let raw = bake(
@@ -442,7 +603,14 @@ mod tests {
                 ..default()
             },
             BakeSettings {
-                epsilon: 0.0,
+                reach: FieldReach::Unlimited { epsilon: 0.0 },
+                ..default()
+            },
+            BakeSettings {
+                reach: FieldReach::Distance {
+                    reach: f32::NAN,
+                    near: 0.5,
+                },
                 ..default()
             },
             BakeSettings {
@@ -455,6 +623,86 @@ mod tests {
                 Err(BakeError::BadSettings(_))
             ));
         }
+    }
+
+    #[test]
+    fn a_finite_reach_counts_only_near_hits_and_ends_the_grid_where_nothing_reaches() {
+        let settings = BakeSettings {
+            resolution: 16,
+            rays: 512,
+            reach: FieldReach::Distance {
+                reach: 0.75,
+                near: 0.3,
+            },
+            ..default()
+        };
+        let field = bake(cube(), &settings, &|_, _| {}).unwrap();
+        assert_eq!((field.reach, field.near_reach), (0.75, 0.3));
+        // The grid is the cube's bounds grown by the reach.
+        assert!((field.half_extent - Vec3::splat(1.25)).abs().max_element() < 1e-5);
+        let r = field.resolution;
+        let cell = 2.0 * field.half_extent / r.as_vec3();
+        let at = |i: usize| {
+            let (x, y, z) = (
+                i as u32 % r.x,
+                (i as u32 / r.x) % r.y,
+                i as u32 / (r.x * r.y),
+            );
+            field.center - field.half_extent
+                + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell
+        };
+        for (i, c) in field.cells.iter().enumerate() {
+            let p = at(i);
+            // Distance from the cube's surface (outside) of this grid point.
+            let outside = (p.abs() - Vec3::splat(0.5)).max(Vec3::ZERO).length();
+            if outside >= 0.75 {
+                assert_eq!(c[0], 0.0, "{p} lies beyond the reach");
+            }
+            let near = field.near_cells[i][0];
+            assert!(near <= c[0] + 1e-6, "the near part is part of the whole");
+            if outside >= 0.3 {
+                assert_eq!(near, 0.0, "{p} lies beyond the near reach");
+            }
+            // The signed distance is the distance to the surface, negative inside.
+            let [signed, ox, oy, oz] = field.distances[i];
+            let mean = Vec3::new(ox, oy, oz).length();
+            if p.abs().max_element() < 0.45 {
+                assert!(signed < 0.0, "{p} is inside: {signed}");
+            } else if outside > 0.05 && outside < 0.3 {
+                // The nearest of 512 rays: a little long where the nearest point is an edge.
+                assert!(
+                    signed >= outside - 0.01 && signed < 1.15 * outside + 0.01,
+                    "{p}: {signed} vs {outside}"
+                );
+            }
+            if near > 0.0 {
+                assert!(mean > 0.0 && mean < 0.3, "{mean}");
+            }
+        }
+        // Right beside a face, half the sphere is blocked within reach.
+        let beside = field
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| {
+                let p = at(*i);
+                (p.x - 0.55).abs() < 0.06 && p.y.abs() < 0.1 && p.z.abs() < 0.1
+            })
+            .map(|(_, c)| c[0])
+            .next()
+            .expect("a cell beside the +x face");
+        assert!((0.35..0.5).contains(&beside), "{beside}");
+    }
+
+    #[test]
+    fn flat_objects_get_flat_grids_of_about_cubic_cells() {
+        let res = grid_resolution(Vec3::new(10.75, 0.75, 10.75), 32);
+        assert!(
+            res.y >= 4 && res.y <= 8 && res.x == res.z && res.x > 60,
+            "{res}"
+        );
+        let cube = grid_resolution(Vec3::splat(1.0), 32);
+        assert_eq!(cube, UVec3::splat(32));
     }
 
     #[test]

@@ -1,12 +1,21 @@
 // Ambient occlusion fields (Malmer et al. 2005, §3.1–3.3): for each occluder, the back faces of
 // its grid box are drawn without depth test; each covered pixel rebuilds its world position from
-// the ND-buffer, moves it into the grid, interpolates occlusion a and the average occluded
-// direction d trilinearly, and turns them into the share of ambient light blocked: 2a (occlusion
-// only, §3.2) or T_clip(a, cos β) (cone, §3.3.1). Blending multiplies the field buffer by 1 − that
-// (§3.3.2). `reference::fields` is the CPU twin.
+// the ND-buffer, moves it into the grid and interpolates the stored occlusion a and average
+// occluded direction d trilinearly, from grid points outside the object only (their signed
+// distance is positive), so that a point on a thin object never mixes values from its two sides.
+// The object's own surface gets nothing: the occlusion fades out over the half cell next to it,
+// by the interpolated signed distance; the near field shades that surface. a and d become the
+// share of ambient light blocked: 2a (occlusion only, §3.2) or the cone of fraction a around d
+// clipped by the receiver's tangent plane (T_clip of §3.3.1, `cap_occlusion`). The field holds
+// them twice, for hits within R and within the near field's reach; under `FarFieldBlend::CountOnce`
+// the near part goes to the red channel where the ND-buffer does not hold its occluders, the
+// rest to the green one. Blending multiplies the field buffer by 1 − that (§3.3.2).
+// `reference::fields` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
+#import bevy_dynamic_ao::cap_occlusion::{cap_occlusion, share_beyond}
+#import bevy_dynamic_ao::settings::DynamicAoSettings
 
 struct FieldInstance {
     // Unit cube [-1, 1]³ to world: places the grid box.
@@ -15,19 +24,20 @@ struct FieldInstance {
     grid_from_world: mat4x4<f32>,
     // Mesh-space directions to world space (columns; w unused).
     world_from_mesh: mat3x4<f32>,
-    // Cells per axis, and the first cell in `cells`.
+    // Cells per axis, and the first cell in `cells` (each cell is three vec4).
     resolution: vec3<u32>,
     offset: u32,
+    // x: how far from the object's surface its own surface's fade ends, mesh units.
+    params: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> instances: array<FieldInstance>;
 @group(0) @binding(2) var<storage, read> cells: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> t_clip_table: array<f32>;
-@group(0) @binding(4) var front_depth: texture_depth_2d;
-@group(0) @binding(5) var front_normal: texture_2d<f32>;
-
-const T_CLIP_SIZE: u32 = 32u;
+@group(0) @binding(3) var front_depth: texture_depth_2d;
+@group(0) @binding(4) var front_normal: texture_2d<f32>;
+@group(0) @binding(5) var back_depth: texture_depth_2d;
+@group(0) @binding(6) var<uniform> settings: DynamicAoSettings;
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
@@ -57,36 +67,67 @@ fn vertex(
     return out;
 }
 
-fn cell(field: FieldInstance, c: vec3<u32>) -> vec4<f32> {
-    let r = field.resolution;
-    return cells[field.offset + (c.z * r.y + c.y) * r.x + c.x];
+// The interpolated content of a field at one point.
+struct FieldSample {
+    // Occlusion a and average occluded direction (mesh space), hits within R.
+    far: vec4<f32>,
+    // The same within the near field's reach.
+    near: vec4<f32>,
+    // Mean offset to the points the near rays meet, mesh units.
+    near_offset: vec3<f32>,
+    // Signed distance to the object's surface, mesh units.
+    signed_distance: f32,
 }
 
-// Trilinear interpolation between cell centres, clamped at the outer cells.
-fn sample_field(field: FieldInstance, uvw: vec3<f32>) -> vec4<f32> {
+// Trilinear interpolation between cell centres, clamped at the outer cells, over the corners
+// outside the object (the signed distance over all eight).
+fn sample_field(field: FieldInstance, uvw: vec3<f32>) -> FieldSample {
     let r = vec3<f32>(field.resolution);
     let g = clamp(uvw * r - 0.5, vec3<f32>(0.0), r - 1.0);
     let i0 = vec3<u32>(floor(g));
     let i1 = min(i0 + 1u, field.resolution - 1u);
     let f = g - vec3<f32>(i0);
-    let c00 = mix(cell(field, vec3(i0.x, i0.y, i0.z)), cell(field, vec3(i1.x, i0.y, i0.z)), f.x);
-    let c10 = mix(cell(field, vec3(i0.x, i1.y, i0.z)), cell(field, vec3(i1.x, i1.y, i0.z)), f.x);
-    let c01 = mix(cell(field, vec3(i0.x, i0.y, i1.z)), cell(field, vec3(i1.x, i0.y, i1.z)), f.x);
-    let c11 = mix(cell(field, vec3(i0.x, i1.y, i1.z)), cell(field, vec3(i1.x, i1.y, i1.z)), f.x);
-    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+    var out: FieldSample;
+    out.far = vec4<f32>(0.0);
+    out.near = vec4<f32>(0.0);
+    out.near_offset = vec3<f32>(0.0);
+    out.signed_distance = 0.0;
+    var outside = 0.0;
+    for (var corner = 0u; corner < 8u; corner++) {
+        let pick = vec3<bool>((corner & 1u) != 0u, (corner & 2u) != 0u, (corner & 4u) != 0u);
+        let c = select(i0, i1, pick);
+        let w3 = select(1.0 - f, f, pick);
+        let w = w3.x * w3.y * w3.z;
+        let at = 3u * (field.offset + (c.z * field.resolution.y + c.y) * field.resolution.x + c.x);
+        let distances = cells[at + 2u];
+        out.signed_distance += w * distances.x;
+        if distances.x > 0.0 {
+            outside += w;
+            out.far += w * cells[at];
+            out.near += w * cells[at + 1u];
+            out.near_offset += w * distances.yzw;
+        }
+    }
+    if outside > 0.0 {
+        out.far /= outside;
+        out.near /= outside;
+        out.near_offset /= outside;
+    }
+    return out;
 }
 
-fn t_clip(a: f32, cos_beta: f32) -> f32 {
-    let n = f32(T_CLIP_SIZE - 1u);
-    let x = clamp(a, 0.0, 1.0) * n;
-    let y = (clamp(cos_beta, -1.0, 1.0) * 0.5 + 0.5) * n;
-    let x0 = min(u32(floor(x)), T_CLIP_SIZE - 2u);
-    let y0 = min(u32(floor(y)), T_CLIP_SIZE - 2u);
-    let fx = x - f32(x0);
-    let fy = y - f32(y0);
-    let top = mix(t_clip_table[x0 * T_CLIP_SIZE + y0], t_clip_table[x0 * T_CLIP_SIZE + y0 + 1u], fy);
-    let bottom = mix(t_clip_table[(x0 + 1u) * T_CLIP_SIZE + y0], t_clip_table[(x0 + 1u) * T_CLIP_SIZE + y0 + 1u], fy);
-    return mix(top, bottom, fx);
+// The share of light a cone of fraction `a` of the sphere around mesh-space `d` blocks at a
+// receiver with world normal `n`.
+fn cone_occlusion(field: FieldInstance, a: f32, d: vec3<f32>, n: vec3<f32>) -> f32 {
+#ifdef CONE
+    let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
+    let axis = m * d;
+    let length2 = dot(axis, axis);
+    let cos_beta = select(0.0, dot(axis, n) * inverseSqrt(length2), length2 > 1e-12);
+    return cap_occlusion(1.0 - 2.0 * clamp(a, 0.0, 1.0), cos_beta);
+#else
+    return min(2.0 * a, 1.0);
+#endif
 }
 
 @fragment
@@ -104,13 +145,17 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         return vec4<f32>(0.0);
     }
     let s = sample_field(field, uvw);
-#ifdef CONE
-    let axis = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz) * s.yzw;
-    let length2 = dot(axis, axis);
-    let cos_beta = select(0.0, dot(axis, normal) * inverseSqrt(length2), length2 > 1e-12);
-    let occlusion = t_clip(s.x, cos_beta);
-#else
-    let occlusion = min(2.0 * s.x, 1.0);
-#endif
-    return vec4<f32>(occlusion, 0.0, 0.0, 0.0);
+    // Nothing on the object's own surface, fading in over the half cell next to it.
+    let fade = smoothstep(0.0, field.params.x, s.signed_distance);
+    let all = cone_occlusion(field, s.far.x, s.far.yzw, normal) * fade;
+    let near = settings.far_near_radius;
+    if near <= 0.0 {
+        return vec4<f32>(0.0, all, 0.0, 0.0);
+    }
+    let inner = cone_occlusion(field, s.near.x, s.near.yzw, normal) * fade;
+    // The near part's occluders lie about its mean hit point.
+    let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
+    let at = p + m * s.near_offset;
+    let held = nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, at, 0.1 * near);
+    return vec4<f32>(inner * (1.0 - held), share_beyond(all, inner), 0.0, 0.0);
 }

@@ -5,11 +5,12 @@
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `AOFIELD\0` |
-//! | 4 | version (u32, currently 1) |
+//! | 4 | version (u32, currently 2) |
 //! | 12 | grid resolution x, y, z (u32 each, 2 to [`MAX_RESOLUTION`]) |
 //! | 12 | grid box centre, mesh space (f32 × 3, metres) |
 //! | 12 | grid box half extents e_i (f32 × 3, metres, > 0) |
-//! | 16 per cell | occlusion a ∈ [0, 1], then the average occluded direction (f32 × 4), x fastest, then y, then z |
+//! | 8 | the distances the occlusion counts within: reach, then near reach (f32 × 2, metres, 0 = unlimited) |
+//! | 48 per cell | occlusion a ∈ [0, 1] within reach and the average occluded direction (f32 × 4); the same within the near reach (f32 × 4); the signed distance to the surface and the mean offset from the cell's centre to the points where rays meet the object within the near reach (f32 × 4, metres); cells x fastest, then y, then z |
 //! | 8 | FNV-1a 64-bit hash of every byte before it |
 
 use bevy::asset::Asset;
@@ -18,27 +19,42 @@ use bevy::reflect::TypePath;
 
 /// First bytes of every `.aofield` file.
 pub const MAGIC: &[u8; 8] = b"AOFIELD\0";
-/// The version this crate writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this crate writes and reads (version 1 held occlusion at unlimited distance only).
+pub const VERSION: u32 = 2;
 /// Largest grid resolution per axis.
 pub const MAX_RESOLUTION: u32 = 256;
-const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12;
+const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12 + 8;
+/// Floats per cell in the file.
+const CELL_FLOATS: usize = 12;
 const CHECKSUM_BYTES: usize = 8;
 
 /// A baked ambient occlusion field (Malmer et al. 2005): per grid cell, the fraction of the
 /// sphere of directions the object blocks and the average occluded direction, on a regular grid
-/// over a box around the object, in the object's own (mesh) space.
+/// over a box around the object, in the object's own (mesh) space; counted within two distances
+/// (the camera's radius and the near field's), with the signed distance to the object's surface.
 #[derive(Asset, TypePath, Clone, Debug, PartialEq)]
 pub struct AoFieldData {
     /// Cells per axis.
     pub resolution: UVec3,
     /// Centre of the grid box, mesh space, metres.
     pub center: Vec3,
-    /// Half extents of the grid box, metres (e_i of eq. 4).
+    /// Half extents of the grid box, metres (e_i of eq. 4, or the object's bounds grown by
+    /// `reach`).
     pub half_extent: Vec3,
-    /// Per cell, x fastest: occlusion a ∈ [0, 1] (eq. 2) and the average occluded direction
-    /// (unit, or zero where nothing is occluded).
+    /// Rays count hits closer than this, metres; 0: at any distance (the paper's).
+    pub reach: f32,
+    /// `near_cells` count hits closer than this, metres; 0: at any distance.
+    pub near_reach: f32,
+    /// Per cell, x fastest: occlusion a ∈ [0, 1] (eq. 2, hits within `reach`) and the average
+    /// occluded direction (unit, or zero where nothing is occluded).
     pub cells: Vec<[f32; 4]>,
+    /// The same for hits within `near_reach`.
+    pub near_cells: Vec<[f32; 4]>,
+    /// Per cell: the signed distance from the cell's centre to the object's surface (negative
+    /// inside a closed object or behind a one-sided one), then the mean offset from the cell's
+    /// centre to the points where rays meet the object within `near_reach` (zero without any),
+    /// metres.
+    pub distances: Vec<[f32; 4]>,
 }
 
 /// Why bytes are not a valid `.aofield` file.
@@ -117,6 +133,12 @@ impl AoFieldData {
         (self.resolution.x * self.resolution.y * self.resolution.z) as usize
     }
 
+    /// How far from the object's surface the fade of its own surface ends (half the smallest
+    /// cell side), mesh units: closer, a receiver is taken to lie on the object itself.
+    pub fn own_surface_fade(&self) -> f32 {
+        (self.half_extent / self.resolution.as_vec3()).min_element()
+    }
+
     /// Index of cell (x, y, z).
     pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
         ((z * self.resolution.y + y) * self.resolution.x + x) as usize
@@ -124,7 +146,8 @@ impl AoFieldData {
 
     /// The file bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + 16 * self.cells.len() + CHECKSUM_BYTES);
+        let mut bytes =
+            Vec::with_capacity(HEADER_BYTES + 4 * CELL_FLOATS * self.cells.len() + CHECKSUM_BYTES);
         bytes.extend_from_slice(MAGIC);
         bytes.extend_from_slice(&VERSION.to_le_bytes());
         for v in self.resolution.to_array() {
@@ -135,11 +158,14 @@ impl AoFieldData {
             .to_array()
             .into_iter()
             .chain(self.half_extent.to_array())
+            .chain([self.reach, self.near_reach])
         {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
-        for cell in &self.cells {
-            for v in cell {
+        for ((cell, near), distances) in
+            self.cells.iter().zip(&self.near_cells).zip(&self.distances)
+        {
+            for v in cell.iter().chain(near).chain(distances) {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -168,11 +194,16 @@ impl AoFieldData {
         }
         let center = Vec3::new(f32_at(24), f32_at(28), f32_at(32));
         let half_extent = Vec3::new(f32_at(36), f32_at(40), f32_at(44));
-        if !center.is_finite() || !half_extent.is_finite() || half_extent.min_element() <= 0.0 {
+        let (reach, near_reach) = (f32_at(48), f32_at(52));
+        let valid_box =
+            center.is_finite() && half_extent.is_finite() && half_extent.min_element() > 0.0;
+        let valid_reach =
+            reach.is_finite() && reach >= 0.0 && near_reach.is_finite() && near_reach >= 0.0;
+        if !(valid_box && valid_reach) {
             return Err(AoFieldError::BadBox);
         }
         let cells = (resolution.x * resolution.y * resolution.z) as usize;
-        let expected = HEADER_BYTES + 16 * cells + CHECKSUM_BYTES;
+        let expected = HEADER_BYTES + 4 * CELL_FLOATS * cells + CHECKSUM_BYTES;
         if bytes.len() != expected {
             return Err(AoFieldError::WrongLength {
                 expected,
@@ -184,19 +215,33 @@ impl AoFieldData {
         if fnv1a(body) != stored {
             return Err(AoFieldError::ChecksumMismatch);
         }
-        let cells = (0..cells)
-            .map(|i| {
-                let at = HEADER_BYTES + 16 * i;
-                let cell = [f32_at(at), f32_at(at + 4), f32_at(at + 8), f32_at(at + 12)];
-                let valid = cell.iter().all(|v| v.is_finite()) && (0.0..=1.0).contains(&cell[0]);
-                valid.then_some(cell).ok_or(AoFieldError::BadCell(i))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let (mut far, mut near, mut distances) = (
+            Vec::with_capacity(cells),
+            Vec::with_capacity(cells),
+            Vec::with_capacity(cells),
+        );
+        for i in 0..cells {
+            let at = HEADER_BYTES + 4 * CELL_FLOATS * i;
+            let v: [f32; CELL_FLOATS] = std::array::from_fn(|k| f32_at(at + 4 * k));
+            let valid = v.iter().all(|v| v.is_finite())
+                && (0.0..=1.0).contains(&v[0])
+                && (0.0..=1.0).contains(&v[4]);
+            if !valid {
+                return Err(AoFieldError::BadCell(i));
+            }
+            far.push([v[0], v[1], v[2], v[3]]);
+            near.push([v[4], v[5], v[6], v[7]]);
+            distances.push([v[8], v[9], v[10], v[11]]);
+        }
         Ok(Self {
             resolution,
             center,
             half_extent,
-            cells,
+            reach,
+            near_reach,
+            cells: far,
+            near_cells: near,
+            distances,
         })
     }
 }
@@ -208,11 +253,19 @@ mod tests {
     fn field() -> AoFieldData {
         let resolution = UVec3::new(3, 2, 4);
         let cells = (0..24).map(|i| [i as f32 / 24.0, 0.0, 1.0, 0.0]).collect();
+        let near_cells = (0..24).map(|i| [i as f32 / 48.0, 1.0, 0.0, 0.0]).collect();
+        let distances = (0..24)
+            .map(|i| [i as f32 - 12.0, 0.25, 0.0, -0.5])
+            .collect();
         AoFieldData {
             resolution,
             center: Vec3::new(0.5, 1.0, -2.0),
             half_extent: Vec3::new(1.0, 2.0, 3.0),
+            reach: 2.0,
+            near_reach: 0.75,
             cells,
+            near_cells,
+            distances,
         }
     }
 
@@ -252,6 +305,8 @@ mod tests {
         let mut huge = field();
         huge.resolution = UVec3::new(1, 2, 2);
         huge.cells.truncate(4);
+        huge.near_cells.truncate(4);
+        huge.distances.truncate(4);
         assert!(matches!(
             AoFieldData::from_bytes(&huge.to_bytes()),
             Err(AoFieldError::BadResolution(_))

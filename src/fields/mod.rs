@@ -2,17 +2,43 @@
 //!
 //! A field is a small 3D grid around an object, in the object's own space, holding at every
 //! grid point the fraction of the sphere of directions the object blocks (eq. 2) and the average
-//! occluded direction. [`baker`] computes it by ray casting (grid extent by eq. 4, border
-//! rescale §3.4.1, interior fill §3.4.2); [`format`](mod@format) stores it as a versioned, checksummed
-//! `.aofield` file; [`AoFieldLoader`] loads such files as [`AoFieldData`] assets, and bad files
-//! fail to load with a message instead of panicking. The `ao_bake` example bakes every mesh of
-//! a glTF file.
+//! occluded direction. [`baker`] computes it by ray casting; [`format`](mod@format) stores it as a
+//! versioned, checksummed `.aofield` file; [`AoFieldLoader`] loads such files as [`AoFieldData`]
+//! assets, and bad files fail to load with a message instead of panicking. The `ao_bake`
+//! example bakes every mesh of a glTF file.
 //!
 //! At render time (§3.1) each occluder with an [`AoField`] draws the back faces of its grid box;
 //! every pixel inside the box reads the field at its world position and the receiver's normal,
 //! and the occluders' visibilities multiply (§3.3.2). [`FieldShading`](crate::FieldShading) on
 //! the camera picks the occlusion-only shading (2a, §3.2) or the cone (T_clip, §3.3.1, the
-//! default: it needs no special case for the object's own surface).
+//! default, evaluated in closed form by `shaders/cap_occlusion.wgsl`).
+//!
+//! Where this departs from the paper, and why (each measured in `tests/gpu/far_field.rs` and
+//! `cargo bench --bench far_field`):
+//!
+//! - **What ground truth measures.** The paper counts hits at any distance, cuts the grid where
+//!   occlusion falls below ε (eq. 4) and rescales every value so the border reads 0 (§3.4.1),
+//!   which lowered the occlusion next to a box just off-screen from 0.205 to 0.091. Here rays
+//!   count hits within the camera's [`radius`](crate::DynamicAo::radius) R
+//!   ([`FieldReach::CameraRadius`], baked again in the background when the cameras' radius
+//!   changes), so the grid is the object's bounds grown by R and is exactly 0 at its border: no
+//!   rescale is needed. The paper's field is [`BakeSettings::paper`].
+//! - **Counted once.** Each grid point stores a second occlusion and direction for hits within the
+//!   near field's reach, and the mean point those rays meet: under
+//!   [`FarFieldBlend::CountOnce`](crate::FarFieldBlend::CountOnce) that part is left to the near
+//!   field where the ND-buffer holds that point, and the rest joins as the part beyond.
+//! - **Never on its own surface.** A thin object (a floor, a wall, a table top) has grid points on
+//!   both sides, and interpolating across it mixed values from both, so an open floor read
+//!   0.4–0.6. Grid points store their signed distance to the object; the lookup interpolates only
+//!   points outside it (no interior fill needed) and fades the field out over the half cell next
+//!   to the object, so the object's own surface is left to the near field: an open floor with its
+//!   own field reads 1.
+//! - **Cells of about the same size along every axis**, within a budget of `resolution`³ cells:
+//!   a floor's thin grid gets fine cells across its height.
+//!
+//! A field is rigid: on a skinned or morphed mesh it is baked in the pose the mesh has when it is
+//! first seen (with a warning); animated meshes belong to [`SphereOccluder`](crate::spheres::SphereOccluder)
+//! or a [`VoxelAoVolume`](crate::voxels::VoxelAoVolume).
 
 pub mod baker;
 mod component;
@@ -21,7 +47,6 @@ mod loader;
 mod node;
 mod render;
 mod systems;
-pub mod t_clip;
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::{AssetApp, embedded_asset};
@@ -29,11 +54,11 @@ use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
 use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
 
-pub use baker::{BakeError, BakeSettings, bake, grid_box};
+pub use baker::{BakeError, BakeSettings, FieldReach, bake, grid_box, grid_resolution};
 pub use component::{AoField, AoFieldCache};
 pub use format::{AoFieldData, AoFieldError};
 pub use loader::AoFieldLoader;
-pub use systems::ActiveAoField;
+pub use systems::{ActiveAoField, PendingAoField};
 
 pub(crate) use render::FieldPipelines;
 
@@ -50,7 +75,11 @@ impl Plugin for AoFieldPlugin {
             .register_type::<AoField>()
             .init_resource::<AoFieldCache>()
             .init_resource::<systems::BakedFields>()
-            .add_systems(PostUpdate, systems::resolve_fields);
+            .add_systems(
+                PostUpdate,
+                // Skinned and morphed meshes are baked in their pose of this frame.
+                systems::resolve_fields.after(bevy::transform::TransformSystems::Propagate),
+            );
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };

@@ -3,6 +3,7 @@
 use bevy::ecs::prelude::*;
 use bevy::render::{
     diagnostic::RecordDiagnostics,
+    extract_component::DynamicUniformIndex,
     render_resource::{
         LoadOp, Operations, PipelineCache, RenderPassColorAttachment, RenderPassDescriptor, StoreOp,
     },
@@ -12,7 +13,7 @@ use bevy::render::{
 
 use super::render::{FieldBindGroup, FieldBuffers, FieldPipelines};
 use crate::settings::FieldShading;
-use crate::view::{DynamicAoTextures, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn field_pass(
     view: ViewQuery<(
@@ -20,13 +21,14 @@ pub(crate) fn field_pass(
         &DynamicAoTextures,
         Option<&FieldBindGroup>,
         &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
     )>,
     pipelines: Res<FieldPipelines>,
     pipeline_cache: Res<PipelineCache>,
     buffers: Res<FieldBuffers>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset) = view.into_inner();
+    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
     if !ao_view.fields {
         return;
     }
@@ -60,7 +62,11 @@ pub(crate) fn field_pass(
         && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline)
     {
         pass.set_render_pipeline(render_pipeline);
-        pass.set_bind_group(0, &bind_group.0, &[view_offset.offset]);
+        pass.set_bind_group(
+            0,
+            &bind_group.0,
+            &[view_offset.offset, settings_index.index()],
+        );
         pass.draw(0..36, 0..buffers.count);
     }
     pass_span.end(&mut pass);

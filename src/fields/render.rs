@@ -1,5 +1,5 @@
 //! Render-world side of the AO fields: every field asset in one storage buffer, one instance per
-//! occluder, the T_clip table, the box pipeline and the per-view bind groups.
+//! occluder, the box pipeline and the per-view bind groups.
 
 use bevy::asset::{AssetId, Assets, load_embedded_asset};
 use bevy::camera::visibility::InheritedVisibility;
@@ -9,6 +9,7 @@ use bevy::math::{Affine3A, Mat4, Vec3, Vec4};
 use bevy::prelude::GlobalTransform;
 use bevy::render::{
     Extract,
+    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{
             storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
@@ -23,8 +24,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::format::AoFieldData;
 use super::systems::ActiveAoField;
-use super::t_clip::t_clip_table;
-use crate::view::{DynamicAoView, FAR_OCCLUSION_FORMAT};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT};
 
 /// One occluder as `fields.wgsl` reads it.
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -35,6 +35,8 @@ pub(crate) struct FieldInstance {
     world_from_mesh: [Vec4; 3],
     resolution: [u32; 3],
     offset: u32,
+    /// x: where the fade of the object's own surface ends, mesh units (half a cell).
+    params: Vec4,
 }
 
 impl FieldInstance {
@@ -69,6 +71,7 @@ impl FieldInstance {
             ],
             resolution: field.resolution.to_array(),
             offset,
+            params: Vec4::new(field.own_surface_fade(), 0.0, 0.0, 0.0),
         })
     }
 }
@@ -78,9 +81,10 @@ impl FieldInstance {
 pub(crate) struct FieldBuffers {
     /// Field assets in `cells`, in order, with their first cell.
     layout: Vec<(AssetId<AoFieldData>, u32)>,
+    /// Three vec4 per cell: far occlusion and direction, near occlusion and direction, signed
+    /// distance and mean offset to the near hits.
     cells: RawBufferVec<Vec4>,
     instances: RawBufferVec<FieldInstance>,
-    t_clip: RawBufferVec<f32>,
     /// `cells` changed and must be written again.
     dirty: bool,
     /// Occluders to draw.
@@ -89,16 +93,13 @@ pub(crate) struct FieldBuffers {
 
 impl Default for FieldBuffers {
     fn default() -> Self {
-        let mut t_clip = RawBufferVec::new(BufferUsages::STORAGE);
-        t_clip.extend(t_clip_table());
         // A binding needs a buffer even before the first field exists; nothing reads this cell.
         let mut cells = RawBufferVec::new(BufferUsages::STORAGE);
-        cells.push(Vec4::ZERO);
+        cells.extend([Vec4::ZERO; 3]);
         Self {
             layout: Vec::new(),
             cells,
             instances: RawBufferVec::new(BufferUsages::STORAGE),
-            t_clip,
             dirty: true,
             count: 0,
         }
@@ -133,13 +134,22 @@ pub(crate) fn extract_fields(
         buffers.cells.clear();
         for id in used {
             let field = fields.get(id).expect("checked above");
-            buffers.layout.push((id, buffers.cells.len() as u32));
-            buffers
+            buffers.layout.push((id, buffers.cells.len() as u32 / 3));
+            for ((far, near), distances) in field
                 .cells
-                .extend(field.cells.iter().map(|c| Vec4::from_array(*c)));
+                .iter()
+                .zip(&field.near_cells)
+                .zip(&field.distances)
+            {
+                buffers.cells.extend([
+                    Vec4::from_array(*far),
+                    Vec4::from_array(*near),
+                    Vec4::from_array(*distances),
+                ]);
+            }
         }
         if buffers.cells.is_empty() {
-            buffers.cells.push(Vec4::ZERO);
+            buffers.cells.extend([Vec4::ZERO; 3]);
         }
         buffers.dirty = true;
     }
@@ -175,9 +185,6 @@ pub(crate) fn write_field_buffers(
         buffers.cells.write_buffer(&device, &queue);
         buffers.dirty = false;
     }
-    if buffers.t_clip.buffer().is_none() {
-        buffers.t_clip.write_buffer(&device, &queue);
-    }
     buffers.instances.write_buffer(&device, &queue);
 }
 
@@ -200,9 +207,10 @@ impl FromWorld for FieldPipelines {
                     uniform_buffer::<ViewUniform>(true),
                     storage(),
                     storage(),
-                    storage(),
                     texture_depth_2d(),
                     texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_depth_2d(),
+                    uniform_buffer::<DynamicAoUniform>(true),
                 ),
             ),
         );
@@ -232,7 +240,7 @@ impl FromWorld for FieldPipelines {
                             color: multiply,
                             alpha: multiply,
                         }),
-                        write_mask: ColorWrites::RED,
+                        write_mask: ColorWrites::RED | ColorWrites::GREEN,
                     })],
                     ..default()
                 }),
@@ -261,18 +269,24 @@ pub(crate) fn prepare_field_bind_groups(
     pipelines: Res<FieldPipelines>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
+    settings: Res<ComponentUniforms<DynamicAoUniform>>,
     buffers: Res<FieldBuffers>,
-    views: Query<(Entity, &DynamicAoView, &ViewPrepassTextures)>,
+    views: Query<(
+        Entity,
+        &DynamicAoView,
+        &DynamicAoTextures,
+        &ViewPrepassTextures,
+    )>,
 ) {
-    let (Some(view_binding), Some(instances), Some(cells), Some(t_clip)) = (
+    let (Some(view_binding), Some(instances), Some(cells), Some(settings_binding)) = (
         view_uniforms.uniforms.binding(),
         buffers.instances.binding(),
         buffers.cells.binding(),
-        buffers.t_clip.binding(),
+        settings.binding(),
     ) else {
         return;
     };
-    for (entity, view, prepass) in &views {
+    for (entity, view, textures, prepass) in &views {
         let (true, Some(depth), Some(normal)) =
             (view.fields, prepass.depth_view(), prepass.normal_view())
         else {
@@ -286,9 +300,10 @@ pub(crate) fn prepare_field_bind_groups(
                 view_binding.clone(),
                 instances.clone(),
                 cells.clone(),
-                t_clip.clone(),
                 depth,
                 normal,
+                &textures.back_depth.default_view,
+                settings_binding.clone(),
             )),
         );
         commands.entity(entity).insert(FieldBindGroup(bind_group));

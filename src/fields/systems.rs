@@ -6,23 +6,37 @@ use std::path::PathBuf;
 use bevy::asset::{AssetId, Assets, Handle};
 use bevy::ecs::prelude::*;
 use bevy::log::{info, warn};
-use bevy::math::Affine3A;
+use bevy::math::{Affine3A, Vec3};
+use bevy::mesh::morph::{MeshMorphWeights, MorphWeights};
+use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::mesh::{Mesh, Mesh3d};
 use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::{GlobalTransform, Name};
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
-use super::baker::{BakeSettings, bake};
+use super::baker::{BakeSettings, FieldReach, bake};
 use super::component::{AoField, AoFieldCache};
 use super::format::AoFieldData;
 use crate::reference::scene::{Triangle, TriangleScene};
+use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS, DynamicAo};
+use crate::spheres::refit::{Deformer, Pose};
+use crate::spheres::rest_mesh::RestMesh;
+use crate::spheres::{mesh_morph_weights, skin_joints};
 
 /// The field an [`AoField`] occluder casts from, added by the plugin once that field exists
 /// (loaded, or baked on load). Until then the occluder casts nothing.
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct ActiveAoField(pub Handle<AoFieldData>);
 
-type BakeKey = (AssetId<Mesh>, [u32; 4]);
+/// On an [`AoField::Bake`] occluder while its field for the current cameras' radii is being baked
+/// (in the background); the field it had before, if any, stays active meanwhile. Tools that
+/// capture one frame wait until no occluder carries it.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PendingAoField;
+
+/// A bake: the mesh, for a posed (skinned or morphed) mesh the entity whose pose it is, and the
+/// settings.
+type BakeKey = (AssetId<Mesh>, Option<Entity>, [u32; 7]);
 type BakeResult = Result<AoFieldData, String>;
 
 /// Fields baked (or being baked) from meshes this run.
@@ -32,16 +46,21 @@ pub(crate) struct BakedFields {
     pending: HashMap<BakeKey, Task<BakeResult>>,
 }
 
-fn key(mesh: AssetId<Mesh>, settings: &BakeSettings) -> BakeKey {
-    (
-        mesh,
-        [
-            settings.resolution,
-            settings.epsilon.to_bits(),
-            settings.rays,
-            u32::from(settings.rescale_border) | u32::from(settings.fill_interior) << 1,
-        ],
-    )
+fn settings_key(settings: &BakeSettings) -> [u32; 7] {
+    let (kind, a, b) = match settings.reach {
+        FieldReach::CameraRadius => (0, 0.0, 0.0),
+        FieldReach::Distance { reach, near } => (1, reach, near),
+        FieldReach::Unlimited { epsilon } => (2, epsilon, 0.0),
+    };
+    [
+        settings.resolution,
+        kind,
+        a.to_bits(),
+        b.to_bits(),
+        settings.rays,
+        u32::from(settings.rescale_border) | u32::from(settings.fill_interior) << 1,
+        super::format::VERSION,
+    ]
 }
 
 /// FNV-1a over the triangles and settings: the name of the cached file.
@@ -59,7 +78,7 @@ fn content_hash(triangles: &[Triangle], settings: &BakeSettings) -> u64 {
             }
         }
     }
-    for v in key(AssetId::default(), settings).1 {
+    for v in settings_key(settings) {
         eat(&v.to_le_bytes());
     }
     hash
@@ -103,22 +122,92 @@ fn bake_or_load(
     Ok(field)
 }
 
+/// Frames a skinned or morphed occluder is seen before it is baked, so that an animation set on
+/// the frame it appears has posed it.
+const POSE_FRAMES: u32 = 3;
+
+/// The radius R and near-field reach the fields should count within: the largest among the
+/// cameras with [`DynamicAo`], the crate's defaults without one.
+fn camera_reach(cameras: &Query<&DynamicAo>) -> (f32, f32) {
+    let mut reach: Option<(f32, f32)> = None;
+    for ao in cameras {
+        let radius = ao.effective_radius();
+        let near = radius.min(ao.effective_near_field_radius());
+        reach = Some(reach.map_or((radius, near), |(r, n)| (r.max(radius), n.max(near))));
+    }
+    reach.unwrap_or((
+        DEFAULT_RADIUS,
+        DEFAULT_RADIUS.min(DEFAULT_NEAR_FIELD_RADIUS),
+    ))
+}
+
+type Occluders<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static AoField,
+        Option<&'static Mesh3d>,
+        Option<&'static ActiveAoField>,
+        Has<PendingAoField>,
+        Option<&'static Name>,
+        Option<&'static GlobalTransform>,
+        Option<&'static SkinnedMesh>,
+        Option<&'static MeshMorphWeights>,
+    ),
+>;
+
+/// The triangles to bake for one occluder, in its mesh's space: the mesh as stored, or for a
+/// skinned or morphed mesh its current pose brought back into the entity's space.
+fn bake_triangles(
+    mesh: &Mesh,
+    posed: Option<(&GlobalTransform, &[Affine3A], &[f32])>,
+) -> Vec<Triangle> {
+    let mut scene = TriangleScene::default();
+    let Some((transform, joints, weights)) = posed else {
+        scene.add_mesh(mesh, Affine3A::IDENTITY);
+        return scene.triangles;
+    };
+    let Ok(rest) = RestMesh::from_mesh(mesh) else {
+        scene.add_mesh(mesh, Affine3A::IDENTITY);
+        return scene.triangles;
+    };
+    let pose = Pose {
+        world_from_mesh: transform.affine(),
+        joints,
+        morph_weights: weights,
+    };
+    let deformer = Deformer::new(&rest, &pose);
+    let mesh_from_world = transform.affine().inverse();
+    let points: Vec<Vec3> = (0..rest.positions.len())
+        .map(|v| mesh_from_world.transform_point3(deformer.point(v).into()))
+        .collect();
+    rest.triangles
+        .iter()
+        .map(|t| Triangle {
+            vertices: t.map(|i| points[i as usize]),
+            normals: None,
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve_fields(
     mut commands: Commands,
-    occluders: Query<(
-        Entity,
-        &AoField,
-        Option<&Mesh3d>,
-        Option<&ActiveAoField>,
-        Option<&Name>,
-        Option<&GlobalTransform>,
-    )>,
+    occluders: Occluders,
+    cameras: Query<&DynamicAo>,
+    transforms: Query<&GlobalTransform>,
+    morph_weights: Query<&MorphWeights>,
     meshes: Res<Assets<Mesh>>,
+    inverse_bindposes: Res<Assets<SkinnedMeshInverseBindposes>>,
     mut fields: ResMut<Assets<AoFieldData>>,
     cache: Res<AoFieldCache>,
     mut baked: ResMut<BakedFields>,
     mut warned: Local<HashSet<Entity>>,
     mut degenerate: Local<HashSet<Entity>>,
+    mut posed_warned: Local<HashSet<Entity>>,
+    mut joints: Local<Vec<Affine3A>>,
+    mut seen_for: Local<HashMap<Entity, u32>>,
 ) {
     // Finished bakes become assets.
     let mut finished = Vec::new();
@@ -133,8 +222,11 @@ pub(crate) fn resolve_fields(
             .ready
             .insert(key, result.map(|field| fields.add(field)));
     }
+    let (radius, near) = camera_reach(&cameras);
+    seen_for.retain(|e, _| occluders.contains(*e));
 
-    for (entity, field, mesh, resolved, name, transform) in &occluders {
+    for (entity, field, mesh, resolved, pending, name, transform, skinned, morphs) in &occluders {
+        let label = || name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
         // The render pass skips an occluder it cannot place; say so once.
         let placeable = transform.is_none_or(|t| {
             let affine = t.affine();
@@ -143,8 +235,9 @@ pub(crate) fn resolve_fields(
         if !placeable {
             if degenerate.insert(entity) {
                 warn!(
-                    "AoField on {entity}: its transform is zero-size or not finite; it casts no \
-                     field while that lasts"
+                    "AoField on {}: its transform is zero-size or not finite; it casts no field \
+                     while that lasts",
+                    label()
                 );
             }
         } else {
@@ -156,23 +249,57 @@ pub(crate) fn resolve_fields(
                 let Some(mesh) = mesh else {
                     if warned.insert(entity) {
                         warn!(
-                            "AoField::Bake on {entity} needs a Mesh3d on the same entity; it casts no field"
+                            "AoField::Bake on {} needs a Mesh3d on the same entity; it casts no \
+                             field",
+                            label()
                         );
                     }
                     continue;
                 };
-                let key = key(mesh.id(), settings);
+                let settings = settings.for_camera(radius, near);
+                let weights = mesh_morph_weights(morphs, &morph_weights);
+                let posed = skinned.is_some() || weights.iter().any(|w| *w != 0.0);
+                let key = (mesh.id(), posed.then_some(entity), settings_key(&settings));
+                // A posed mesh waits a few frames for its animation to be applied.
+                let frames = seen_for.entry(entity).or_insert(0);
+                *frames += 1;
+                let settled = !posed || *frames > POSE_FRAMES;
                 if let Some(result) = baked.ready.get(&key) {
                     Some(result.clone())
                 } else {
-                    if !baked.pending.contains_key(&key)
+                    if settled
+                        && !baked.pending.contains_key(&key)
                         && let Some(data) = meshes.get(mesh.id())
                     {
-                        let mut scene = TriangleScene::default();
-                        scene.add_mesh(data, Affine3A::IDENTITY);
-                        let (settings, folder) = (*settings, cache.folder.clone());
+                        let pose = match (posed, transform) {
+                            (true, Some(transform)) => {
+                                if posed_warned.insert(entity) {
+                                    warn!(
+                                        "AoField on {}: a skinned or morphed mesh is baked in \
+                                         the pose it has now and then moves rigidly with its \
+                                         entity; for animated meshes use SphereOccluder or a \
+                                         VoxelAoVolume",
+                                        label()
+                                    );
+                                }
+                                if let Some(skinned) = skinned {
+                                    skin_joints(
+                                        skinned,
+                                        &inverse_bindposes,
+                                        &transforms,
+                                        &mut joints,
+                                    );
+                                } else {
+                                    joints.clear();
+                                }
+                                Some((transform, joints.as_slice(), weights))
+                            }
+                            _ => None,
+                        };
+                        let triangles = bake_triangles(data, pose);
+                        let folder = cache.folder.clone();
                         let task = AsyncComputeTaskPool::get()
-                            .spawn(async move { bake_or_load(scene.triangles, settings, folder) });
+                            .spawn(async move { bake_or_load(triangles, settings, folder) });
                         baked.pending.insert(key, task);
                     }
                     None
@@ -180,15 +307,27 @@ pub(crate) fn resolve_fields(
             }
         };
         match handle {
-            Some(Ok(handle)) if resolved.is_none_or(|r| r.0 != handle) => {
-                commands.entity(entity).insert(ActiveAoField(handle));
+            Some(Ok(handle)) => {
+                if resolved.is_none_or(|r| r.0 != handle) {
+                    commands.entity(entity).insert(ActiveAoField(handle));
+                }
+                if pending {
+                    commands.entity(entity).remove::<PendingAoField>();
+                }
             }
-            Some(Err(error)) if warned.insert(entity) => {
-                let label =
-                    name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
-                warn!("AoField on {label} casts no field: {error}");
+            Some(Err(error)) => {
+                if pending {
+                    commands.entity(entity).remove::<PendingAoField>();
+                }
+                if warned.insert(entity) {
+                    warn!("AoField on {} casts no field: {error}", label());
+                }
             }
-            _ => {}
+            None => {
+                if !pending {
+                    commands.entity(entity).insert(PendingAoField);
+                }
+            }
         }
     }
 }

@@ -1,5 +1,6 @@
 // Separable cross-bilateral blur of the occlusion buffer (Bavoil & Sainz 2008, "Cross Bilateral
-// Filter"). `reference::filter` is the CPU twin.
+// Filter"), of one channel or, with TWO_CHANNELS, of the two of far-field occlusion.
+// `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::settings::DynamicAoSettings
@@ -8,7 +9,20 @@
 @group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
 @group(0) @binding(2) var depth: texture_depth_2d;
 @group(0) @binding(3) var input: texture_2d<f32>;
+#ifdef TWO_CHANNELS
+@group(0) @binding(4) var output: texture_storage_2d<rg32float, write>;
+#else
 @group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
+#endif
+
+// The channels a texel of `input` carries.
+fn value(q: vec2<i32>) -> vec2<f32> {
+#ifdef TWO_CHANNELS
+    return textureLoad(input, q, 0).rg;
+#else
+    return vec2<f32>(textureLoad(input, q, 0).r, 0.0);
+#endif
+}
 
 // Distance in front of the camera for a reverse-Z depth, metres.
 fn linear_depth(d: f32) -> f32 {
@@ -30,7 +44,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
     let radius = i32(settings.blur_radius);
     let sigma = (f32(radius) + 1.0) * 0.5;
     let falloff = 1.0 / (2.0 * sigma * sigma);
-    var sum = 0.0;
+    var sum = vec2<f32>(0.0);
     var weights = 0.0;
     for (var i = -radius; i <= radius; i++) {
         let q = pixel + step * i;
@@ -43,10 +57,10 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         }
         let dz = (linear_depth(d) - z0) / z0 * settings.blur_sharpness;
         let w = exp(-f32(i * i) * falloff - dz * dz);
-        sum += w * textureLoad(input, q, 0).r;
+        sum += w * value(q);
         weights += w;
     }
-    textureStore(output, pixel, vec4<f32>(sum / weights));
+    textureStore(output, pixel, vec4<f32>(sum / weights, 0.0, 0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)

@@ -25,7 +25,7 @@ use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
 
 use crate::schedule::DynamicAoSystems;
 
-pub(crate) use pipeline::BlurPipelines;
+pub(crate) use pipeline::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
 
 /// Registers the blur pipelines and passes.
 pub struct FilterPlugin;

@@ -27,8 +27,8 @@ pub(crate) fn blur_pass(
     let (camera, bind_groups, view_offset, settings_index) = view.into_inner();
     let (Some(size), Some(x), Some(y)) = (
         camera.physical_viewport_size,
-        pipeline_cache.get_compute_pipeline(pipelines.x),
-        pipeline_cache.get_compute_pipeline(pipelines.y),
+        pipeline_cache.get_compute_pipeline(pipelines.one.x),
+        pipeline_cache.get_compute_pipeline(pipelines.one.y),
     ) else {
         return;
     };
@@ -67,7 +67,7 @@ pub(crate) fn upsample_pass(
     let (camera, bind_group, view_offset, settings_index) = view.into_inner();
     let (Some(size), Some(pipeline)) = (
         camera.physical_viewport_size,
-        pipeline_cache.get_compute_pipeline(pipelines.upsample),
+        pipeline_cache.get_compute_pipeline(pipelines.one.upsample),
     ) else {
         return;
     };

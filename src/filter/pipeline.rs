@@ -16,8 +16,8 @@ use bevy::utils::default;
 
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
 
-#[derive(Resource)]
-pub(crate) struct BlurPipelines {
+/// The blur and upsampling pipelines for one kind of occlusion buffer.
+pub(crate) struct FilterPipelines {
     pub layout: BindGroupLayoutDescriptor,
     pub x: CachedComputePipelineId,
     pub y: CachedComputePipelineId,
@@ -25,60 +25,101 @@ pub(crate) struct BlurPipelines {
     pub upsample: CachedComputePipelineId,
 }
 
+impl FilterPipelines {
+    /// Every pipeline of the set has compiled.
+    pub fn ready(&self, cache: &PipelineCache) -> bool {
+        [self.x, self.y, self.upsample]
+            .into_iter()
+            .all(|id| cache.get_compute_pipeline(id).is_some())
+    }
+}
+
+/// Filters for one-channel occlusion (the image-space techniques) and for two-channel far-field
+/// occlusion (voxel volumes: the near field's share and the rest, see `FarFieldBlend`).
+#[derive(Resource)]
+pub(crate) struct BlurPipelines {
+    pub one: FilterPipelines,
+    pub two: FilterPipelines,
+}
+
+/// Format of two-channel occlusion buffers.
+pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
+
+fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
+    let (format, shader_defs, suffix): (_, Vec<bevy::shader::ShaderDefVal>, _) = if two_channels {
+        (OCCLUSION_PAIR_FORMAT, vec!["TWO_CHANNELS".into()], "_pair")
+    } else {
+        (OCCLUSION_FORMAT, Vec::new(), "")
+    };
+    let layout = BindGroupLayoutDescriptor::new(
+        format!("dynamic_ao_blur{suffix}_layout"),
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer::<ViewUniform>(true),
+                uniform_buffer::<DynamicAoUniform>(true),
+                texture_depth_2d(),
+                texture_2d(TextureSampleType::Float { filterable: false }),
+                texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+            ),
+        ),
+    );
+    let upsample_layout = BindGroupLayoutDescriptor::new(
+        format!("dynamic_ao_upsample{suffix}_layout"),
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer::<ViewUniform>(true),
+                uniform_buffer::<DynamicAoUniform>(true),
+                texture_depth_2d(),
+                texture_2d(TextureSampleType::Float { filterable: false }),
+                texture_2d(TextureSampleType::Float { filterable: false }),
+                texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+            ),
+        ),
+    );
+    let blur = load_embedded_asset!(world, "blur.wgsl");
+    let upsample = load_embedded_asset!(world, "upsample.wgsl");
+    let cache = world.resource::<PipelineCache>();
+    let pipeline = |label: String, layout: &BindGroupLayoutDescriptor, shader, entry: &str| {
+        cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some(label.into()),
+            layout: vec![layout.clone()],
+            shader,
+            shader_defs: shader_defs.clone(),
+            entry_point: Some(entry.to_string().into()),
+            ..default()
+        })
+    };
+    FilterPipelines {
+        x: pipeline(
+            format!("dynamic_ao_blur_x{suffix}_pipeline"),
+            &layout,
+            blur.clone(),
+            "blur_x",
+        ),
+        y: pipeline(
+            format!("dynamic_ao_blur_y{suffix}_pipeline"),
+            &layout,
+            blur,
+            "blur_y",
+        ),
+        upsample: pipeline(
+            format!("dynamic_ao_upsample{suffix}_pipeline"),
+            &upsample_layout,
+            upsample,
+            "upsample",
+        ),
+        layout,
+        upsample_layout,
+    }
+}
+
 impl FromWorld for BlurPipelines {
     fn from_world(world: &mut World) -> Self {
-        let layout = BindGroupLayoutDescriptor::new(
-            "dynamic_ao_blur_layout",
-            &BindGroupLayoutEntries::sequential(
-                ShaderStages::COMPUTE,
-                (
-                    uniform_buffer::<ViewUniform>(true),
-                    uniform_buffer::<DynamicAoUniform>(true),
-                    texture_depth_2d(),
-                    texture_2d(TextureSampleType::Float { filterable: false }),
-                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
-                ),
-            ),
-        );
-        let shader = load_embedded_asset!(world, "blur.wgsl");
-        let cache = world.resource::<PipelineCache>();
-        let pipeline = |label: &'static str, entry: &'static str| {
-            cache.queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some(label.into()),
-                layout: vec![layout.clone()],
-                shader: shader.clone(),
-                entry_point: Some(entry.into()),
-                ..default()
-            })
-        };
-        let x = pipeline("dynamic_ao_blur_x_pipeline", "blur_x");
-        let y = pipeline("dynamic_ao_blur_y_pipeline", "blur_y");
-        let upsample_layout = BindGroupLayoutDescriptor::new(
-            "dynamic_ao_upsample_layout",
-            &BindGroupLayoutEntries::sequential(
-                ShaderStages::COMPUTE,
-                (
-                    uniform_buffer::<ViewUniform>(true),
-                    uniform_buffer::<DynamicAoUniform>(true),
-                    texture_depth_2d(),
-                    texture_2d(TextureSampleType::Float { filterable: false }),
-                    texture_2d(TextureSampleType::Float { filterable: false }),
-                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
-                ),
-            ),
-        );
-        let upsample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some("dynamic_ao_upsample_pipeline".into()),
-            layout: vec![upsample_layout.clone()],
-            shader: load_embedded_asset!(world, "upsample.wgsl"),
-            ..default()
-        });
         Self {
-            layout,
-            x,
-            y,
-            upsample_layout,
-            upsample,
+            one: filter_pipelines(world, false),
+            two: filter_pipelines(world, true),
         }
     }
 }
@@ -113,8 +154,8 @@ pub(crate) fn prepare_blur_bind_groups(
     else {
         return;
     };
-    let layout = pipeline_cache.get_bind_group_layout(&pipelines.layout);
-    let upsample_layout = pipeline_cache.get_bind_group_layout(&pipelines.upsample_layout);
+    let layout = pipeline_cache.get_bind_group_layout(&pipelines.one.layout);
+    let upsample_layout = pipeline_cache.get_bind_group_layout(&pipelines.one.upsample_layout);
     for (entity, textures, prepass, view) in &views {
         match (
             prepass.depth_view(),

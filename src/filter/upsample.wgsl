@@ -1,7 +1,8 @@
 // Joint bilateral upsampling of a half-resolution occlusion buffer (Reinbothe, Boubekeur & Alexa
 // 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
 // window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
-// difference, world distance and AO difference. `reference::filter` is the CPU twin.
+// difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
+// `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
@@ -12,7 +13,20 @@
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
 @group(0) @binding(4) var low: texture_2d<f32>;
+#ifdef TWO_CHANNELS
+@group(0) @binding(5) var output: texture_storage_2d<rg32float, write>;
+#else
 @group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
+#endif
+
+// The channels a texel of `low` carries.
+fn value(l: vec2<i32>) -> vec2<f32> {
+#ifdef TWO_CHANNELS
+    return textureLoad(low, l, 0).rg;
+#else
+    return vec2<f32>(textureLoad(low, l, 0).r, 0.0);
+#endif
+}
 
 // Screen-space support of w_d, full-resolution pixels (the m of eq. 6).
 const WINDOW: f32 = 4.0;
@@ -43,8 +57,9 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = world_position(view, x, size, depth);
     let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
     let nearest = min(x / 2, low_dims - 1);
-    let h_x = textureLoad(low, nearest, 0).r;
-    var sum = 0.0;
+    let v_x = value(nearest);
+    let h_x = v_x.x + v_x.y;
+    var sum = vec2<f32>(0.0);
     var weights = 0.0;
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
@@ -58,15 +73,16 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
             if dq <= 0.0 {
                 continue;
             }
-            let h_y = textureLoad(low, l, 0).r;
+            let v_y = value(l);
+            let h_y = v_y.x + v_y.y;
             let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
             let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), 2.0);
             let w_p = wendland(distance(p, world_position(view, y, size, dq)), settings.radius);
             let w_h = wendland(abs(h_x - h_y), 1.0);
             let w = w_d * w_n * w_p * w_h;
-            sum += w * h_y;
+            sum += w * v_y;
             weights += w;
         }
     }
-    textureStore(output, x, vec4<f32>(select(h_x, sum / weights, weights > 0.0)));
+    textureStore(output, x, vec4<f32>(select(v_x, sum / weights, weights > 0.0), 0.0, 0.0));
 }

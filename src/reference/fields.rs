@@ -1,73 +1,131 @@
 //! AO field occlusion (Malmer et al. 2005, §3.2–3.3) on the CPU, exactly as `fields/fields.wgsl`
-//! evaluates it: trilinear interpolation between cell centres, 2a or T_clip(a, cos β) per
-//! occluder, visibilities multiplied.
+//! evaluates it: trilinear interpolation between cell centres over the corners outside the
+//! object, the fade on the object's own surface, 2a or the clipped cone (T_clip, through
+//! [`cap_occlusion`]) per occluder, split into the near field's share and the rest, visibilities
+//! multiplied.
 
-use bevy::math::{Affine3A, Vec3};
+use bevy::math::{Affine3A, Vec3, Vec4};
 
+use super::cap::{cap_occlusion, share_beyond};
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::fields::AoFieldData;
-use crate::fields::t_clip::t_clip;
 use crate::settings::FieldShading;
 
-/// Occlusion a and average occluded direction (mesh space) of `field` at grid coordinates
-/// `uvw` ∈ [0, 1]³.
-pub fn sample_field(field: &AoFieldData, uvw: Vec3) -> (f32, Vec3) {
+/// The interpolated content of a field at one point.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FieldSample {
+    /// Occlusion a and average occluded direction (mesh space), hits within the reach.
+    pub far: Vec4,
+    /// The same within the near reach.
+    pub near: Vec4,
+    /// Mean offset to the points the near rays meet, mesh units.
+    pub near_offset: Vec3,
+    /// Signed distance to the object's surface, mesh units.
+    pub signed_distance: f32,
+}
+
+/// `field` at grid coordinates `uvw` ∈ [0, 1]³.
+pub fn sample_field(field: &AoFieldData, uvw: Vec3) -> FieldSample {
     let r = field.resolution.as_vec3();
     let g = (uvw * r - 0.5).clamp(Vec3::ZERO, r - 1.0);
     let i0 = g.floor().as_uvec3();
     let i1 = (i0 + 1).min(field.resolution - 1);
     let f = g - i0.as_vec3();
-    let cell = |x: u32, y: u32, z: u32| field.cells[field.index(x, y, z)];
-    let mix = |a: [f32; 4], b: [f32; 4], t: f32| -> [f32; 4] {
-        [0, 1, 2, 3].map(|k| a[k] + (b[k] - a[k]) * t)
-    };
-    let c00 = mix(cell(i0.x, i0.y, i0.z), cell(i1.x, i0.y, i0.z), f.x);
-    let c10 = mix(cell(i0.x, i1.y, i0.z), cell(i1.x, i1.y, i0.z), f.x);
-    let c01 = mix(cell(i0.x, i0.y, i1.z), cell(i1.x, i0.y, i1.z), f.x);
-    let c11 = mix(cell(i0.x, i1.y, i1.z), cell(i1.x, i1.y, i1.z), f.x);
-    let c = mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
-    (c[0], Vec3::new(c[1], c[2], c[3]))
+    let mut out = FieldSample::default();
+    let mut outside = 0.0;
+    for corner in 0..8u32 {
+        let pick = |bit: u32| corner & bit != 0;
+        let c = [
+            if pick(1) { i1.x } else { i0.x },
+            if pick(2) { i1.y } else { i0.y },
+            if pick(4) { i1.z } else { i0.z },
+        ];
+        let w3 = [
+            if pick(1) { f.x } else { 1.0 - f.x },
+            if pick(2) { f.y } else { 1.0 - f.y },
+            if pick(4) { f.z } else { 1.0 - f.z },
+        ];
+        let w = w3[0] * w3[1] * w3[2];
+        let i = field.index(c[0], c[1], c[2]);
+        let [signed, ox, oy, oz] = field.distances[i];
+        out.signed_distance += w * signed;
+        if signed > 0.0 {
+            outside += w;
+            out.far += w * Vec4::from_array(field.cells[i]);
+            out.near += w * Vec4::from_array(field.near_cells[i]);
+            out.near_offset += w * Vec3::new(ox, oy, oz);
+        }
+    }
+    if outside > 0.0 {
+        out.far /= outside;
+        out.near /= outside;
+        out.near_offset /= outside;
+    }
+    out
 }
 
-/// The share of ambient light one occluder's field blocks at world position `p` with unit
-/// normal `n`; 0 outside its grid box.
+fn smoothstep(edge: f32, x: f32) -> f32 {
+    let t = (x / edge).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The two parts of the share of ambient light one occluder's field blocks at world position
+/// `p` with unit normal `n`: the part within `near` metres where `held(point, tolerance)` says
+/// the ND-buffer does not hold its occluders, and the share of the rest (see
+/// [`share_beyond`]); `near` ≤ 0: everything in the second. (0, 0) outside its grid box.
 pub fn occluder_occlusion(
     field: &AoFieldData,
     world_from_mesh: Affine3A,
     p: Vec3,
     n: Vec3,
     shading: FieldShading,
-    t_clip_table: &[f32],
-) -> f32 {
+    near: f32,
+    held: &dyn Fn(Vec3, f32) -> f32,
+) -> [f32; 2] {
     let mesh = world_from_mesh.inverse().transform_point3(p);
     let uvw = (mesh - (field.center - field.half_extent)) / (2.0 * field.half_extent);
     if uvw.min_element() < 0.0 || uvw.max_element() > 1.0 {
-        return 0.0;
+        return [0.0, 0.0];
     }
-    let (a, d) = sample_field(field, uvw);
-    match shading {
-        FieldShading::OcclusionOnly => (2.0 * a).min(1.0),
+    let s = sample_field(field, uvw);
+    let fade = smoothstep(field.own_surface_fade(), s.signed_distance);
+    let cone = |c: Vec4| match shading {
+        FieldShading::OcclusionOnly => (2.0 * c.x).min(1.0),
         FieldShading::Cone => {
-            let axis = world_from_mesh.matrix3 * d;
+            let axis = world_from_mesh.matrix3 * Vec3::new(c.y, c.z, c.w);
             let length2 = axis.length_squared();
             let cos_beta = if length2 > 1e-12 {
                 axis.dot(n) / length2.sqrt()
             } else {
                 0.0
             };
-            t_clip(t_clip_table, a, cos_beta)
+            cap_occlusion(1.0 - 2.0 * c.x.clamp(0.0, 1.0), cos_beta)
         }
+    };
+    let all = cone(s.far) * fade;
+    if near <= 0.0 {
+        return [0.0, all];
     }
+    let inner = cone(s.near) * fade;
+    let at = p + world_from_mesh.matrix3 * s.near_offset;
+    [
+        inner * (1.0 - held(at, 0.1 * near)),
+        share_beyond(all, inner),
+    ]
 }
 
-/// Combined occlusion 1 − Π(1 − o_i) of `occluders` at every pixel of the front layer of `nd`.
+/// Combined occlusion of `occluders` at every pixel of the front layer of `nd`, as compose
+/// joins it with the near field off: per part 1 − Π(1 − o_i), then the two parts as
+/// independent occluders. `near` and `use_back` as the view's count-once settings (0: none).
 pub fn field_occlusion(
     nd: &NdBuffer,
     view: &ViewMatrices,
     occluders: &[(&AoFieldData, Affine3A)],
     shading: FieldShading,
-    t_clip_table: &[f32],
+    near: f32,
+    use_back: bool,
 ) -> Vec<f32> {
+    let held = |x: Vec3, tolerance: f32| nd.holds(view, use_back, x, tolerance);
     let mut out = vec![0.0; (nd.width * nd.height) as usize];
     for y in 0..nd.height as i32 {
         for x in 0..nd.width as i32 {
@@ -78,20 +136,14 @@ pub fn field_occlusion(
                 continue;
             }
             let p = view.world_position(x, y, nd.width, nd.height, texel.depth);
-            let visibility: f32 = occluders
-                .iter()
-                .map(|(field, transform)| {
-                    1.0 - occluder_occlusion(
-                        field,
-                        *transform,
-                        p,
-                        texel.normal,
-                        shading,
-                        t_clip_table,
-                    )
-                })
-                .product();
-            out[(y as u32 * nd.width + x as u32) as usize] = 1.0 - visibility;
+            let mut open = [1.0f32; 2];
+            for (field, transform) in occluders {
+                let parts =
+                    occluder_occlusion(field, *transform, p, texel.normal, shading, near, &held);
+                open[0] *= 1.0 - parts[0];
+                open[1] *= 1.0 - parts[1];
+            }
+            out[(y as u32 * nd.width + x as u32) as usize] = 1.0 - open[0] * open[1];
         }
     }
     out

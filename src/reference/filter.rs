@@ -29,9 +29,24 @@ pub fn joint_bilateral_upsample(
     view: &ViewMatrices,
     radius: f32,
 ) -> Vec<f32> {
+    let pairs: Vec<[f32; 2]> = low.iter().map(|v| [*v, 0.0]).collect();
+    joint_bilateral_upsample_pair(&pairs, nd, view, radius)
+        .into_iter()
+        .map(|v| v[0])
+        .collect()
+}
+
+/// [`joint_bilateral_upsample`] of two-channel occlusion (`TWO_CHANNELS` in
+/// `filter/upsample.wgsl`): the AO weight compares the channels' sum.
+pub fn joint_bilateral_upsample_pair(
+    low: &[[f32; 2]],
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    radius: f32,
+) -> Vec<[f32; 2]> {
     let (w, h) = (nd.width as i32, nd.height as i32);
     let (lw, lh) = ((w + 1) / 2, (h + 1) / 2);
-    let mut out = vec![0.0; (w * h) as usize];
+    let mut out = vec![[0.0; 2]; (w * h) as usize];
     for y in 0..h {
         for x in 0..w {
             let t = nd.front[(y * w + x) as usize];
@@ -40,8 +55,9 @@ pub fn joint_bilateral_upsample(
             }
             let p = view.world_position(x, y, nd.width, nd.height, t.depth);
             let nearest = ((x / 2).min(lw - 1), (y / 2).min(lh - 1));
-            let h_x = low[(nearest.1 * lw + nearest.0) as usize];
-            let (mut sum, mut weights) = (0.0f32, 0.0f32);
+            let v_x = low[(nearest.1 * lw + nearest.0) as usize];
+            let h_x = v_x[0] + v_x[1];
+            let (mut sum, mut weights) = ([0.0f32; 2], 0.0f32);
             for dy in -1..=1 {
                 for dx in -1..=1 {
                     let (lx, ly) = (nearest.0 + dx, nearest.1 + dy);
@@ -53,7 +69,8 @@ pub fn joint_bilateral_upsample(
                     if q.depth <= 0.0 {
                         continue;
                     }
-                    let h_y = low[(ly * lw + lx) as usize];
+                    let v_y = low[(ly * lw + lx) as usize];
+                    let h_y = v_y[0] + v_y[1];
                     let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
                     let world =
                         p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
@@ -61,11 +78,16 @@ pub fn joint_bilateral_upsample(
                         * wendland(1.0 - t.normal.dot(q.normal), 2.0)
                         * wendland(world, radius)
                         * wendland((h_x - h_y).abs(), 1.0);
-                    sum += weight * h_y;
+                    sum[0] += weight * v_y[0];
+                    sum[1] += weight * v_y[1];
                     weights += weight;
                 }
             }
-            out[(y * w + x) as usize] = if weights > 0.0 { sum / weights } else { h_x };
+            out[(y * w + x) as usize] = if weights > 0.0 {
+                [sum[0] / weights, sum[1] / weights]
+            } else {
+                v_x
+            };
         }
     }
     out

@@ -107,3 +107,20 @@ pub fn pixel_visibility(
     }
     open as f32 / (side * side) as f32
 }
+
+/// Occlusion (0 = open) of the surface point `p` with unit normal `n` by `bvh`: the
+/// cosine-weighted share of `count` hemisphere rays that meet a triangle within `reach`. The
+/// directions lie on a spiral, each at its own elevation, so that small caps are measured finely;
+/// `p` should lie just off its own surface.
+pub fn point_occlusion(bvh: &Bvh, p: Vec3, n: Vec3, reach: f32, count: u32) -> f32 {
+    let (t1, t2) = n.any_orthonormal_pair();
+    let mut hit = 0u32;
+    for i in 0..count {
+        let u = (i as f32 + 0.5) / count as f32;
+        let phi = std::f32::consts::TAU * (i as f32 * 0.618_034).fract();
+        let r = u.sqrt();
+        let d = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u).sqrt();
+        hit += u32::from(bvh.any_hit(p, d, 0.0, reach));
+    }
+    hit as f32 / count.max(1) as f32
+}

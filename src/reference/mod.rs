@@ -1,6 +1,7 @@
 //! CPU reference: the plugin's formulas evaluated on the CPU, a BVH ray tracer for ground
 //! truth, image metrics and 16-bit PNG output. No GPU needed; tests, benchmarks and tools use it.
 //!
+//! - [`cap`]: the share of ambient light a cone of directions blocks (T_clip, sphere caps).
 //! - [`nd_buffer`]: an ND-buffer read back from the GPU and the camera that made it.
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
 //! - [`horizon`]: horizon-based AO (Bavoil & Sainz 2008) exactly as `horizon.wgsl` runs it.
@@ -9,12 +10,14 @@
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
 //! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
+//! - [`posed`]: the triangles a Bevy world draws this frame, skinned and morphed meshes posed.
 //! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
 //!   binary hits within a distance R, 1 = open (eq. 1 of the papers).
 //! - [`metrics`]: RMSE and mean bias between two AO images.
 //! - [`png16`]: 16-bit grayscale PNG files of visibility.
 
 pub mod bvh;
+pub mod cap;
 pub mod fields;
 pub mod filter;
 pub mod ground_truth;
@@ -23,6 +26,7 @@ pub mod metrics;
 pub mod nd_buffer;
 pub mod near_field;
 pub mod png16;
+pub mod posed;
 pub mod ray_march;
 pub mod sampling;
 pub mod scene;

@@ -96,6 +96,41 @@ pub struct NdBuffer {
 }
 
 impl NdBuffer {
+    /// How far the ND-buffer already holds the geometry at world point `x`, exactly as
+    /// `nd_buffer_holds` in `shaders/nd_buffer.wgsl` decides it: 1 on screen and no deeper than
+    /// the pixel's first solid interval (front layer, or back layer with `use_back`) plus
+    /// `tolerance`, 0 off-screen or deeper, a ramp over a second `tolerance`.
+    pub fn holds(&self, view: &ViewMatrices, use_back: bool, x: Vec3, tolerance: f32) -> f32 {
+        let clip = view.clip_from_view * view.view_from_world * x.extend(1.0);
+        if clip.w <= 0.0 {
+            return 0.0;
+        }
+        let ndc = clip.xy() / clip.w;
+        if ndc.x.abs() >= 1.0 || ndc.y.abs() >= 1.0 {
+            return 0.0;
+        }
+        let (w, h) = (self.width as f32, self.height as f32);
+        let px = (((ndc.x * 0.5 + 0.5) * w) as i32).min(self.width as i32 - 1);
+        let py = (((0.5 - ndc.y * 0.5) * h) as i32).min(self.height as i32 - 1);
+        let Some(front) = self.texel(false, px, py) else {
+            return 0.0;
+        };
+        if front.depth <= 0.0 {
+            return 1.0;
+        }
+        let mut deepest = front.depth;
+        if use_back
+            && let Some(back) = self.texel(true, px, py)
+            && back.depth > 0.0
+        {
+            deepest = deepest.min(back.depth);
+        }
+        let surface =
+            view.view_depth(view.world_position(px, py, self.width, self.height, deepest));
+        let beyond = view.view_depth(x) - surface - tolerance;
+        1.0 - (beyond / tolerance.max(1e-6)).clamp(0.0, 1.0)
+    }
+
     /// The texel of a layer at (x, y); `None` outside the image.
     pub fn texel(&self, back: bool, x: i32, y: i32) -> Option<NdTexel> {
         if x < 0 || y < 0 || x >= self.width as i32 || y >= self.height as i32 {

@@ -29,7 +29,22 @@ pub struct TriangleScene {
     pub skipped: usize,
 }
 
+/// The axis-aligned bounds (min, max) of `triangles`; (+∞, −∞) when there are none.
+pub fn triangle_bounds(triangles: &[Triangle]) -> (Vec3, Vec3) {
+    triangles
+        .iter()
+        .flat_map(|t| t.vertices)
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
+}
+
 impl TriangleScene {
+    /// The axis-aligned bounds (min, max) of the triangles kept; (+∞, −∞) when there are none.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        triangle_bounds(&self.triangles)
+    }
+
     /// Adds the triangles of `mesh` placed by `world_from_local`. Meshes that are not
     /// triangle lists or lack positions add nothing; degenerate or non-finite triangles are
     /// counted in [`TriangleScene::skipped`].

@@ -1,41 +1,391 @@
-//! Far-field occlusion of sphere occluders (Shanmugam & Arikan 2007, eq. 2–3 and 5) on the CPU,
-//! exactly as `spheres/splat.wgsl` evaluates it.
+//! Far-field occlusion of sphere occluders' proxies on the CPU, exactly as
+//! `shaders/proxy_occlusion.wgsl` and `spheres/splat.wgsl` evaluate it: boxes by Lambert's formula
+//! over the faces they turn towards the receiver, spheres by the cap within reach, each clipped to
+//! a distance; proxies multiply their visibilities.
 
+use std::f32::consts::TAU;
+
+use bevy::math::{Mat3, Vec2, Vec3};
+
+use super::cap::{cap_occlusion, share_beyond};
 use super::nd_buffer::{NdBuffer, ViewMatrices};
-use super::near_field::sphere_occlusion;
-use crate::spheres::{OccluderSpheres, far_field_reach};
+use crate::spheres::{OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
 
-/// Summed far-field occlusion (not clamped) of every pixel of the front layer of `nd`,
-/// row-major: each sphere adds A_ψ at every surface point within its reach d_far.
-pub fn far_field_occlusion(
+/// √π / 2: half the side of the square with the area of the unit disk.
+const SQUARE_OF_DISK: f32 = 0.886_226_9;
+
+/// Lambert's formula over a convex polygon seen from `p` with normal `n`, all corners on or above
+/// the tangent plane.
+fn polygon_occlusion(p: Vec3, n: Vec3, corners: &[Vec3]) -> f32 {
+    let mut sum = 0.0;
+    for i in 0..corners.len() {
+        let a = (corners[i] - p).normalize();
+        let b = (corners[(i + 1) % corners.len()] - p).normalize();
+        let g = a.cross(b);
+        let length = g.length();
+        if length > 1e-12 {
+            sum += length.atan2(a.dot(b)) * n.dot(g) / length;
+        }
+    }
+    (sum.abs() / TAU).min(1.0)
+}
+
+/// The occlusion of the rectangle `centre` ± `u` ± `v` on a face with outward unit normal `f`
+/// within `reach` (≤ 0: no limit), and the centre of the part that counted.
+pub fn face_occlusion(
+    p: Vec3,
+    n: Vec3,
+    centre: Vec3,
+    f: Vec3,
+    (u, v): (Vec3, Vec3),
+    reach: f32,
+) -> (f32, Vec3) {
+    let (hu, hv) = (u.length(), v.length());
+    if hu <= 0.0 || hv <= 0.0 {
+        return (0.0, centre);
+    }
+    let (eu, ev) = (u / hu, v / hv);
+    let (mut lo, mut hi) = (Vec2::new(-hu, -hv), Vec2::new(hu, hv));
+    if reach > 0.0 {
+        let height = f.dot(p - centre);
+        if height >= reach {
+            return (0.0, centre);
+        }
+        let half = (reach * reach - height * height).sqrt() * SQUARE_OF_DISK;
+        let foot = p - f * height - centre;
+        let q = Vec2::new(foot.dot(eu), foot.dot(ev));
+        lo = lo.max(q - half);
+        hi = hi.min(q + half);
+        if lo.x >= hi.x || lo.y >= hi.y {
+            return (0.0, centre);
+        }
+    }
+    let part = centre + eu * (0.5 * (lo.x + hi.x)) + ev * (0.5 * (lo.y + hi.y));
+    let rect = [
+        centre + eu * lo.x + ev * lo.y,
+        centre + eu * hi.x + ev * lo.y,
+        centre + eu * hi.x + ev * hi.y,
+        centre + eu * lo.x + ev * hi.y,
+    ];
+    let mut clipped = Vec::with_capacity(5);
+    for i in 0..4 {
+        let (a, b) = (rect[i], rect[(i + 1) % 4]);
+        let (ha, hb) = (n.dot(a - p), n.dot(b - p));
+        if ha > 0.0 {
+            clipped.push(a);
+        }
+        if (ha > 0.0) != (hb > 0.0) {
+            clipped.push(a.lerp(b, ha / (ha - hb)));
+        }
+    }
+    let occlusion = if clipped.len() >= 3 {
+        polygon_occlusion(p, n, &clipped)
+    } else {
+        0.0
+    };
+    (occlusion, part)
+}
+
+fn face_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let length = a.length();
+    if length > 0.0 {
+        a / length
+    } else {
+        b.cross(c).normalize()
+    }
+}
+
+/// The cap of the sphere (`centre`, `radius`) whose rays from `p` meet it within `reach` (≤ 0: no
+/// limit).
+pub fn sphere_occlusion_within(p: Vec3, n: Vec3, centre: Vec3, radius: f32, reach: f32) -> f32 {
+    let to_centre = centre - p;
+    let d = to_centre.length();
+    let mut cos_gamma = 0.0;
+    if d > radius {
+        cos_gamma = (1.0 - (radius / d) * (radius / d)).sqrt();
+        if reach > 0.0 {
+            if reach <= d - radius {
+                return 0.0;
+            }
+            if reach * reach < d * d - radius * radius {
+                cos_gamma = (reach * reach + d * d - radius * radius) / (2.0 * d * reach);
+            }
+        }
+    }
+    cap_occlusion(cos_gamma, n.dot(to_centre) / d.max(1e-12))
+}
+
+/// One proxy's occlusion of the receiver (`p`, `n`) within `reach` (≤ 0: no limit): the share of
+/// its ambient light the proxy blocks, all of it counted.
+pub fn proxy_occlusion(proxy: &OccluderSphere, p: Vec3, n: Vec3, reach: f32) -> f32 {
+    proxy_channels(proxy, p, n, reach, 0.0, &|_, _| 0.0)[1]
+}
+
+/// How far from its centre a proxy's occlusion reaches under `reach` with camera radius `radius`,
+/// and the distance its rays count hits within (0: no limit).
+fn influence(proxy: &OccluderSphere, reach: ProxyReach, radius: f32) -> (f32, f32) {
+    match reach {
+        ProxyReach::CameraRadius => (proxy.radius + radius, radius),
+        ProxyReach::Epsilon(epsilon) => (far_field_reach(proxy.radius, epsilon), 0.0),
+    }
+}
+
+/// What a camera brings to the proxies: its radius, and under `FarFieldBlend::CountOnce` the near
+/// field's reach with the ND-buffer whose held geometry within it the near field counts (and
+/// whether its back layer counts).
+#[derive(Clone, Copy, Debug)]
+pub struct ProxyCamera {
+    /// The camera's radius R, metres.
+    pub radius: f32,
+    /// The near field's reach under CountOnce, metres; 0 where the far field counts everything.
+    pub near_radius: f32,
+    /// The back-face layer is drawn.
+    pub use_back: bool,
+}
+
+/// The proxies' union, as `compose.wgsl` takes it: both channels of their product
+/// (`occlusion`) scaled so that their total lies halfway between the largest single proxy's
+/// occlusion and the product's total.
+pub fn sphere_union(occlusion: [f32; 2], largest: f32) -> [f32; 2] {
+    let product = 1.0 - (1.0 - occlusion[0]) * (1.0 - occlusion[1]);
+    if product <= 0.0 {
+        return occlusion;
+    }
+    let floor = largest.min(product);
+    let together = floor + 0.5 * (product - floor);
+    [
+        occlusion[0] * together / product,
+        occlusion[1] * together / product,
+    ]
+}
+
+/// The far field of sphere occluders at every pixel of the front layer of `nd`, row-major, in
+/// compose's two channels after the union of [`sphere_union`]: the near field's share the
+/// ND-buffer misses, and the rest (see `splat.wgsl`).
+pub fn far_field_channels(
     nd: &NdBuffer,
     view: &ViewMatrices,
     occluders: &[OccluderSpheres],
-) -> Vec<f32> {
-    let spheres: Vec<_> = occluders
-        .iter()
-        .flat_map(|o| {
-            o.spheres
-                .iter()
-                .map(|s| (s.center, s.radius, far_field_reach(s.radius, o.epsilon)))
-        })
-        .collect();
-    let mut out = vec![0.0; (nd.width * nd.height) as usize];
+    camera: &ProxyCamera,
+) -> Vec<[f32; 2]> {
+    let held = |x: Vec3, tolerance: f32| nd.holds(view, camera.use_back, x, tolerance);
+    let mut out = vec![[0.0; 2]; (nd.width * nd.height) as usize];
     for y in 0..nd.height as i32 {
         for x in 0..nd.width as i32 {
             let Some(texel) = nd.texel(false, x, y) else {
                 continue;
             };
-            if texel.depth <= 0.0 || texel.normal == bevy::math::Vec3::ZERO {
+            if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
                 continue;
             }
             let p = view.world_position(x, y, nd.width, nd.height, texel.depth);
-            out[(y as u32 * nd.width + x as u32) as usize] = spheres
-                .iter()
-                .filter(|(center, _, reach)| p.distance(*center) <= *reach)
-                .map(|(center, radius, _)| sphere_occlusion(*center, *radius, p, texel.normal))
-                .sum();
+            let (mut open, mut largest) = ([1.0f32; 2], 0.0f32);
+            for occluder in occluders {
+                for proxy in &occluder.spheres {
+                    let (extent, reach) = influence(proxy, occluder.reach, camera.radius);
+                    if p.distance(proxy.center) > extent {
+                        continue;
+                    }
+                    let [a, b] =
+                        proxy_channels(proxy, p, texel.normal, reach, camera.near_radius, &held);
+                    open[0] *= 1.0 - a;
+                    open[1] *= 1.0 - b;
+                    largest = largest.max(1.0 - (1.0 - a) * (1.0 - b));
+                }
+            }
+            out[(y as u32 * nd.width + x as u32) as usize] =
+                sphere_union([1.0 - open[0], 1.0 - open[1]], largest);
         }
     }
     out
+}
+
+/// The far field of sphere occluders alone, as compose writes it with the near field off:
+/// 1 − (1 − near share)(1 − rest) of [`far_field_channels`].
+pub fn far_field_occlusion(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    occluders: &[OccluderSpheres],
+    camera: &ProxyCamera,
+) -> Vec<f32> {
+    far_field_channels(nd, view, occluders, camera)
+        .into_iter()
+        .map(|[a, b]| 1.0 - (1.0 - a) * (1.0 - b))
+        .collect()
+}
+
+/// One proxy's occlusion in the two channels `splat.wgsl` writes: the part within `near` (> 0)
+/// the ND-buffer does not hold, and the share of the rest; with `near` ≤ 0, (0, all).
+pub fn proxy_channels(
+    proxy: &OccluderSphere,
+    p: Vec3,
+    n: Vec3,
+    reach: f32,
+    near: f32,
+    held: &dyn Fn(Vec3, f32) -> f32,
+) -> [f32; 2] {
+    let tolerance = 0.1 * near;
+    let centre = proxy.center;
+    let clamp = |[a, b]: [f32; 2]| [a.clamp(0.0, 1.0), b.clamp(0.0, 1.0)];
+    match proxy.shape {
+        ProxyShape::Spheres => {
+            let radius = proxy.axes.x_axis.length();
+            let all = sphere_occlusion_within(p, n, centre, radius, reach);
+            if near > 0.0 {
+                let inner = sphere_occlusion_within(p, n, centre, radius, near);
+                clamp([
+                    inner * (1.0 - held(centre, radius + tolerance)),
+                    share_beyond(all, inner),
+                ])
+            } else {
+                clamp([0.0, all])
+            }
+        }
+        ProxyShape::Boxes => {
+            let axes: [Vec3; 3] = [proxy.axes.x_axis, proxy.axes.y_axis, proxy.axes.z_axis];
+            let mut occlusion = [0.0f32; 2];
+            let outside = Vec3::from_array(axes.map(|axis| {
+                let half = axis.length();
+                let along = if half > 0.0 {
+                    (p - centre).dot(axis) / half
+                } else {
+                    0.0
+                };
+                (along.abs() - half).max(0.0)
+            }));
+            if reach > 0.0 && outside.length() >= reach {
+                return occlusion;
+            }
+            let one_part = near > 0.0 && reach > 0.0 && reach <= near;
+            let margin = 1e-4 + 1e-3 * proxy.radius;
+            for i in 0..3 {
+                let (a, b, c) = (axes[i], axes[(i + 1) % 3], axes[(i + 2) % 3]);
+                let normal = face_normal(a, b, c);
+                for side in [-1.0f32, 1.0] {
+                    let f = normal * side;
+                    let face_centre = centre + a * side;
+                    if f.dot(p - face_centre) <= margin {
+                        continue;
+                    }
+                    if near <= 0.0 {
+                        occlusion[1] += face_occlusion(p, n, face_centre, f, (b, c), reach).0;
+                        continue;
+                    }
+                    let inner_reach = if reach > 0.0 { near.min(reach) } else { near };
+                    let (inner, at) = face_occlusion(p, n, face_centre, f, (b, c), inner_reach);
+                    if inner > 0.0 {
+                        occlusion[0] += inner * (1.0 - held(at, tolerance));
+                    }
+                    if !one_part {
+                        let all = face_occlusion(p, n, face_centre, f, (b, c), reach).0;
+                        occlusion[1] += share_beyond(all, inner);
+                    }
+                }
+            }
+            clamp(occlusion)
+        }
+    }
+}
+
+/// A box proxy from its centre and half-extent vectors (columns).
+pub fn box_proxy(center: Vec3, axes: Mat3) -> OccluderSphere {
+    OccluderSphere {
+        center,
+        radius: (axes.x_axis.length_squared()
+            + axes.y_axis.length_squared()
+            + axes.z_axis.length_squared())
+        .sqrt(),
+        axes,
+        shape: ProxyShape::Boxes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy::math::Affine3A;
+    use bevy::prelude::*;
+
+    use super::*;
+    use crate::reference::bvh::Bvh;
+    use crate::reference::ground_truth::point_occlusion;
+    use crate::reference::scene::TriangleScene;
+
+    /// Cosine-weighted share of rays from `p` that hit `bvh` within `reach`.
+    fn traced(bvh: &Bvh, p: Vec3, n: Vec3, reach: f32) -> f32 {
+        point_occlusion(bvh, p + n * 1e-4, n, reach, 4096)
+    }
+
+    #[test]
+    fn a_box_blocks_what_a_ray_tracer_finds() {
+        let half = Vec3::new(0.5, 0.3, 0.8);
+        let turn = Quat::from_euler(EulerRot::XYZ, 0.4, -0.3, 0.9);
+        let placed = Affine3A::from_rotation_translation(turn, Vec3::new(0.2, 0.6, -0.1));
+        let mut scene = TriangleScene::default();
+        scene.add_mesh(&Cuboid::from_size(half * 2.0).into(), placed);
+        let bvh = Bvh::new(scene.triangles);
+        let proxy = box_proxy(
+            placed.translation.into(),
+            Mat3::from_quat(turn) * Mat3::from_diagonal(half),
+        );
+        let mut worst: f32 = 0.0;
+        for (k, reach) in [(0, 0.0), (1, 0.75), (2, 2.0)] {
+            for i in 0..40 {
+                // Receivers on a shell around the box, facing roughly towards it.
+                let a = i as f32 * 2.399;
+                let z = 1.0 - 2.0 * (i as f32 + 0.5) / 40.0;
+                let dir = Vec3::new(
+                    (1.0 - z * z).sqrt() * a.cos(),
+                    z,
+                    (1.0 - z * z).sqrt() * a.sin(),
+                );
+                let p = Vec3::from(placed.translation) + dir * (1.2 + 0.3 * k as f32);
+                let n = (-dir + Vec3::new(0.3, -0.2, 0.1) * (i % 3) as f32).normalize();
+                let limit = if reach > 0.0 { reach } else { f32::INFINITY };
+                let truth = traced(&bvh, p, n, limit);
+                let ours = proxy_occlusion(&proxy, p, n, reach);
+                worst = worst.max((truth - ours).abs());
+                // Without a reach the formula is exact; within one, the clipped square stands for
+                // the disk of the same area.
+                let bound = if reach > 0.0 { 0.03 } else { 0.006 };
+                assert!(
+                    (truth - ours).abs() < bound,
+                    "reach {reach}, receiver {p} facing {n}: traced {truth}, box {ours}"
+                );
+            }
+        }
+        println!("largest difference {worst}");
+    }
+
+    #[test]
+    fn a_flat_box_never_darkens_its_own_plane() {
+        let floor = box_proxy(
+            Vec3::ZERO,
+            Mat3::from_cols(Vec3::X * 10.0, Vec3::ZERO, Vec3::Z * 10.0),
+        );
+        for p in [Vec3::new(0.3, 1e-5, -2.0), Vec3::new(4.0, 0.0, 1.0)] {
+            let a = proxy_occlusion(&floor, p, Vec3::Y, 0.75);
+            assert!(a < 1e-4, "{a}");
+        }
+        // A wall of a box standing on it sees the floor below its horizon: half its light
+        // within reach, less the part farther than the reach.
+        let a = proxy_occlusion(&floor, Vec3::new(0.0, 0.05, 0.0), Vec3::X, 2.0);
+        assert!((0.4..0.5).contains(&a), "{a}");
+    }
+
+    #[test]
+    fn spheres_block_their_cap_within_reach() {
+        let proxy = OccluderSphere {
+            center: Vec3::new(0.0, 2.0, 0.0),
+            radius: 0.5,
+            axes: Mat3::from_diagonal(Vec3::splat(0.5)),
+            shape: ProxyShape::Spheres,
+        };
+        let full = proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 0.0);
+        assert!((full - 0.0625).abs() < 1e-4, "sin²α = 1/16: {full}");
+        // Nothing lies within 1.4 m; all of it within 2 m.
+        assert_eq!(proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 1.4), 0.0);
+        let within = proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 1.8);
+        assert!(within > 0.0 && within < full);
+        assert_eq!(proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 2.0), full);
+    }
 }

@@ -9,7 +9,7 @@ use super::filter::wendland;
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::pcg_hash;
 use super::scene::Triangle;
-use crate::voxels::{VoxelFalloff, VoxelRays};
+use crate::voxels::{VoxelFalloff, VoxelMarch, VoxelRays};
 
 /// A bit grid of `resolution`³ cells; cell (x, y, z) is bit `i % 32` of word `i / 32`,
 /// `i = x + resolution · (y + resolution · z)`, in two layers: the surface cells triangles touch,
@@ -280,13 +280,102 @@ pub fn ray_direction(i: u32, count: u32, cos_spread: f32, j1: f32, j2: f32) -> V
     Vec3::new(phi.cos() * sin_theta, phi.sin() * sin_theta, cos_theta)
 }
 
+/// 1 / v per component, with ±1e30 for components that are 0, as `voxel_ao.wgsl` does it.
+fn safe_inverse(v: Vec3) -> Vec3 {
+    let one = |x: f32| {
+        if x.abs() < 1e-20 {
+            if x < 0.0 { -1e30 } else { 1e30 }
+        } else {
+            1.0 / x
+        }
+    };
+    Vec3::new(one(v.x), one(v.y), one(v.z))
+}
+
+/// World distance along the ray to the first occupied cell it enters, walking every cell it
+/// crosses (Amanatides & Woo 1987), exactly as `first_hit_cells` in `voxel_ao.wgsl`; `None`
+/// when none lies within `reach`.
+pub fn first_hit_cells(grid: &VoxelGrid, origin: Vec3, direction: Vec3, reach: f32) -> Option<f32> {
+    let g0 = grid.grid_from_world.transform_point3(origin);
+    let gd = grid.grid_from_world.transform_vector3(direction);
+    let inverse = safe_inverse(gd);
+    let n = grid.resolution as f32;
+    let t0 = -g0 * inverse;
+    let t1 = (Vec3::splat(n) - g0) * inverse;
+    let (near, far) = (t0.min(t1), t0.max(t1));
+    let mut t = near.max_element().max(0.0);
+    let end = far.min_element().min(reach);
+    if t > end {
+        return None;
+    }
+    let last = grid.resolution as i32 - 1;
+    let start = (g0 + gd * t).floor();
+    let mut cell = [start.x, start.y, start.z].map(|c| (c as i32).clamp(0, last));
+    let step = [gd.x, gd.y, gd.z].map(|d| {
+        if d > 0.0 {
+            1
+        } else if d < 0.0 {
+            -1
+        } else {
+            0
+        }
+    });
+    let boundary = Vec3::new(
+        cell[0] as f32 + if gd.x > 0.0 { 1.0 } else { 0.0 },
+        cell[1] as f32 + if gd.y > 0.0 { 1.0 } else { 0.0 },
+        cell[2] as f32 + if gd.z > 0.0 { 1.0 } else { 0.0 },
+    );
+    let mut next = (boundary - g0) * inverse;
+    let delta = inverse.abs();
+    for _ in 0..3 * grid.resolution + 3 {
+        if grid.occupied(cell) {
+            return Some(t);
+        }
+        let axis = if next.x <= next.y && next.x <= next.z {
+            0
+        } else if next.y <= next.z {
+            1
+        } else {
+            2
+        };
+        t = next[axis];
+        next[axis] += delta[axis];
+        cell[axis] += step[axis];
+        if t > end || cell.iter().any(|c| *c < 0 || *c > last) {
+            return None;
+        }
+    }
+    None
+}
+
+/// What a camera brings to a volume's rays.
+#[derive(Clone, Copy, Debug)]
+pub struct VoxelCamera<'a> {
+    /// The camera's radius R, metres: the reach of volumes without a d_max of their own.
+    pub radius: f32,
+    /// Under `FarFieldBlend::CountOnce`, the near field's reach, metres, and the ND-buffer
+    /// whose held geometry within it is left to the near field (with whether its back layer
+    /// counts); `None` where the voxels count every hit.
+    pub count_once: Option<(f32, &'a NdBuffer, &'a ViewMatrices, bool)>,
+}
+
 /// Occlusion of the surface at `p` with unit normal `n` in one volume (eq. 4, normalized by the
-/// cosines): 0 = open, 1 = enclosed at distance 0.
-pub fn volume_occlusion(grid: &VoxelGrid, rays: &VoxelRays, p: Vec3, n: Vec3) -> f32 {
+/// cosines; 0 = open, 1 = enclosed at distance 0), in the two channels of `voxel_ao.wgsl`: hits
+/// within the near field's reach the ND-buffer does not hold, and the rest as a share of the
+/// rays those leave open.
+pub fn volume_occlusion(
+    grid: &VoxelGrid,
+    rays: &VoxelRays,
+    camera: &VoxelCamera,
+    p: Vec3,
+    n: Vec3,
+) -> [f32; 2] {
+    let reach = rays.reach(camera.radius);
     let g = grid.grid_from_world.transform_point3(p);
     let size = Vec3::splat(grid.resolution as f32);
-    if g.cmplt(-rays.reach).any() || g.cmpgt(size + rays.reach).any() {
-        return 0.0;
+    let margin = (reach + rays.bias) / rays.cell;
+    if g.cmplt(-margin).any() || g.cmpgt(size + margin).any() {
+        return [0.0, 0.0];
     }
     let h = cell_hash(p, rays.noise_cell);
     let (j1, j2, j3) = (
@@ -296,40 +385,59 @@ pub fn volume_occlusion(grid: &VoxelGrid, rays: &VoxelRays, p: Vec3, n: Vec3) ->
     );
     let frame = tangent_frame(n);
     let origin = p + n * rays.bias;
-    let (mut occlusion, mut cosines) = (0.0f32, 0.0f32);
+    let (mut occlusion, mut cosines, mut near_blocked) = ([0.0f32; 2], 0.0f32, 0.0f32);
     for i in 0..rays.rays {
         let local = ray_direction(i, rays.rays, rays.cos_spread, j1, j2);
         let direction = frame * local;
         cosines += local.z;
-        for s in 0..rays.steps {
-            let t = rays.d_max * (s as f32 + j3) / rays.steps as f32;
-            if grid.occupied_at(origin + direction * t) {
-                let weight = match rays.falloff {
-                    VoxelFalloff::Wendland => wendland(t, rays.d_max),
-                    VoxelFalloff::None => 1.0,
-                };
-                occlusion += weight * local.z;
-                break;
+        let hit = match rays.march {
+            VoxelMarch::Cells => first_hit_cells(grid, origin, direction, reach),
+            VoxelMarch::Steps(steps) => (0..steps)
+                .map(|s| reach * (s as f32 + j3) / steps as f32)
+                .find(|t| grid.occupied_at(origin + direction * *t)),
+        };
+        let Some(t) = hit else {
+            continue;
+        };
+        let weight = match rays.falloff {
+            VoxelFalloff::Wendland => wendland(t, reach),
+            VoxelFalloff::None => 1.0,
+        } * local.z;
+        match camera.count_once {
+            Some((near_radius, nd, view, use_back)) if t < near_radius => {
+                occlusion[0] +=
+                    weight * (1.0 - nd.holds(view, use_back, origin + direction * t, rays.bias));
+                near_blocked += local.z;
             }
+            _ => occlusion[1] += weight,
         }
     }
-    if cosines > 0.0 {
-        occlusion / cosines
-    } else {
-        0.0
-    }
+    [
+        if cosines > 0.0 {
+            occlusion[0] / cosines
+        } else {
+            0.0
+        },
+        if cosines - near_blocked > 0.0 {
+            occlusion[1] / (cosines - near_blocked)
+        } else {
+            0.0
+        },
+    ]
 }
 
 /// The half-resolution AO map of `voxels/voxel_ao.wgsl`: texel (i, j) is the largest occlusion
-/// over `volumes` at full-resolution pixel (2i, 2j); row-major, `(w + 1) / 2` × `(h + 1) / 2`.
+/// over `volumes` at full-resolution pixel (2i, 2j), per channel; row-major, `(w + 1) / 2` ×
+/// `(h + 1) / 2`.
 pub fn voxel_ao_map(
     nd: &NdBuffer,
     view: &ViewMatrices,
     volumes: &[(VoxelGrid, VoxelRays)],
-) -> Vec<f32> {
+    camera: &VoxelCamera,
+) -> Vec<[f32; 2]> {
     let (w, h) = (nd.width, nd.height);
     let (lw, lh) = (w.div_ceil(2), h.div_ceil(2));
-    let mut out = vec![0.0; (lw * lh) as usize];
+    let mut out = vec![[0.0; 2]; (lw * lh) as usize];
     for ly in 0..lh {
         for lx in 0..lw {
             let (x, y) = ((lx * 2).min(w - 1) as i32, (ly * 2).min(h - 1) as i32);
@@ -339,8 +447,8 @@ pub fn voxel_ao_map(
             let p = view.world_position(x, y, w, h, t.depth);
             out[(ly * lw + lx) as usize] = volumes
                 .iter()
-                .map(|(grid, rays)| volume_occlusion(grid, rays, p, t.normal))
-                .fold(0.0, f32::max);
+                .map(|(grid, rays)| volume_occlusion(grid, rays, camera, p, t.normal))
+                .fold([0.0f32, 0.0], |a, b| [a[0].max(b[0]), a[1].max(b[1])]);
         }
     }
     out
@@ -412,15 +520,59 @@ mod tests {
         let volume = crate::voxels::VoxelAoVolume {
             half_extents: Vec3::ONE,
             resolution: 16,
-            d_max: 1.0,
             ..Default::default()
         };
         let rays = VoxelRays::new(&volume, grid_from_world);
+        let camera = VoxelCamera {
+            radius: 1.0,
+            count_once: None,
+        };
         let p = Vec3::new(1.0, 1.0, 0.0);
-        let covered = volume_occlusion(&grid, &rays, p, Vec3::Z);
-        let open = volume_occlusion(&grid, &rays, p, -Vec3::Z);
-        assert!(covered > 0.3, "{covered}");
+        let covered = volume_occlusion(&grid, &rays, &camera, p, Vec3::Z)[1];
+        let open = volume_occlusion(&grid, &rays, &camera, p, -Vec3::Z)[1];
+        // A slab 0.375 m above, wider than the reach: rays from the start point (one cell
+        // diagonal up) meet it within 1 m where cos θ > its height, a share 1 − height² of the
+        // cosine-weighted rays.
+        let height = 0.375 - rays.bias;
+        let expected = 1.0 - height * height;
+        assert!((covered - expected).abs() < 0.02, "{covered} vs {expected}");
         assert_eq!(open, 0.0);
+    }
+
+    #[test]
+    fn the_cell_march_finds_a_floor_one_cell_thick_that_steps_miss() {
+        // A floor of cells 1.5 cm thick under a surface point that faces it from 0.3 m above;
+        // the paper's 8 steps over 1 m test it only where one lands in it.
+        let grid_from_world = Affine3A::from_scale(Vec3::splat(64.0))
+            * Affine3A::from_translation(Vec3::new(0.0, 0.0, 0.0));
+        let mut grid = VoxelGrid::new(64, grid_from_world);
+        for x in 0..64 {
+            for y in 0..64 {
+                grid.set([x, y, 10]);
+            }
+        }
+        let p = Vec3::new(0.5, 0.5, 10.5 / 64.0 + 0.3);
+        let camera = VoxelCamera {
+            radius: 1.0,
+            count_once: None,
+        };
+        let occlusion = |march| {
+            let volume = crate::voxels::VoxelAoVolume {
+                half_extents: Vec3::splat(0.5),
+                resolution: 64,
+                march,
+                ..Default::default()
+            };
+            let rays = VoxelRays::new(&volume, grid_from_world);
+            volume_occlusion(&grid, &rays, &camera, p, -Vec3::Z)[1]
+        };
+        let cells = occlusion(VoxelMarch::Cells);
+        let steps = occlusion(VoxelMarch::Steps(8));
+        assert!(
+            cells > 0.6,
+            "the floor within 1 m below covers most rays: {cells}"
+        );
+        assert!(steps < 0.5 * cells, "8 steps: {steps}, every cell: {cells}");
     }
 
     #[test]

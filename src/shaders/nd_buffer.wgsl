@@ -38,3 +38,47 @@ fn pixel_world_size(view: View, depth: f32, height: f32) -> f32 {
     }
     return 2.0 * depth / (p11 * height);
 }
+
+// How far the ND-buffer already holds the geometry at world point `x`, so that the image-space
+// technique counts it (the far field's "counted once"): 1 where `x` projects into the image and
+// lies no deeper than the first solid interval of its pixel (the front layer, or the back layer
+// where `use_back` says one is drawn) plus `tolerance` metres; 0 where `x` is off-screen, behind
+// the camera or deeper than that; a ramp over a second `tolerance` between. A point in front of
+// the visible surface, or on a pixel showing no geometry, counts as held: the camera sees through
+// it, so nothing there was missed. `reference::nd_buffer::nd_buffer_holds` is the CPU twin.
+fn nd_buffer_holds(
+    view: View,
+    front: texture_depth_2d,
+    back: texture_depth_2d,
+    use_back: bool,
+    x: vec3<f32>,
+    tolerance: f32,
+) -> f32 {
+    let clip = view.clip_from_world * vec4<f32>(x, 1.0);
+    if clip.w <= 0.0 {
+        return 0.0;
+    }
+    let ndc = clip.xy / clip.w;
+    if any(abs(ndc) >= vec2<f32>(1.0)) {
+        return 0.0;
+    }
+    let dims = textureDimensions(front);
+    let size = vec2<f32>(dims);
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let pixel = min(vec2<i32>(uv * size), vec2<i32>(dims) - 1);
+    let front_depth = textureLoad(front, pixel, 0);
+    if front_depth <= 0.0 {
+        return 1.0;
+    }
+    var deepest = front_depth;
+    if use_back {
+        let back_depth = textureLoad(back, pixel, 0);
+        if back_depth > 0.0 {
+            // Reverse-Z: the smaller depth lies farther away.
+            deepest = min(deepest, back_depth);
+        }
+    }
+    let surface = view_depth(view, world_position(view, pixel, size, deepest));
+    let beyond = view_depth(view, x) - surface - tolerance;
+    return 1.0 - clamp(beyond / max(tolerance, 1e-6), 0.0, 1.0);
+}

@@ -3,7 +3,7 @@
 #define_import_path bevy_dynamic_ao::settings
 
 struct DynamicAoSettings {
-    // r_far, metres.
+    // Reach of the image-space technique, metres: R, or the near-field radius under CountOnce.
     radius: f32,
     intensity: f32,
     max_samples: u32,
@@ -31,10 +31,17 @@ struct DynamicAoSettings {
     resolution_scale: u32,
     // 1 when the far field of sphere occluders takes part.
     far_field: u32,
-    // 0: near + far, 1: max(near, far).
+    // 0: near + far, 1: max(near, far), 2: counted once, 1 − (1 − near)(1 − far).
     far_field_blend: u32,
     // 1 when AO field occluders take part.
     fields: u32,
     // 1 when voxel volumes take part.
     voxels: u32,
+    // R, metres: far-field terms count occluders within it.
+    far_radius: f32,
+    // The near field's reach under CountOnce, metres: far-field terms leave out the occluders
+    // within it that the ND-buffer holds. 0 where the far field counts every occluder.
+    far_near_radius: f32,
+    // 1 when the back-face layer is drawn.
+    seen_back_layer: u32,
 }

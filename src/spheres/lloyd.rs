@@ -8,7 +8,7 @@
 //! it is pushed inwards and kept inside the surface. That matters because A_ψ = 1 inside a
 //! sphere (§6): a sphere poking out of the mesh would black out the object's own surface.
 
-use bevy::math::Vec3;
+use bevy::math::{Mat3, Vec3};
 
 use super::rest_mesh::RestMesh;
 use crate::reference::bvh::Bvh;
@@ -24,13 +24,16 @@ const INWARD_STEPS: u32 = 16;
 /// Share of the distance to the nearest triangle a sphere may fill.
 const INSIDE_MARGIN: f32 = 0.95;
 
-/// One sphere in the rest pose, with what the per-frame refit needs to move it.
+/// One proxy in the rest pose (a sphere, or a box of [`fit`](super::fit)), with what the
+/// per-frame refit needs to move it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RestSphere {
-    /// Sphere centre, mesh space, metres.
+    /// Centre, mesh space, metres.
     pub center: Vec3,
-    /// Sphere radius, metres.
+    /// Radius of a sphere; of a box, half its diagonal. Metres.
     pub radius: f32,
+    /// Half-extent vectors (columns), mesh space, metres: `radius` × identity for a sphere.
+    pub axes: Mat3,
     /// Area-weighted centroid of the cluster's vertices, mesh space.
     pub centroid: Vec3,
     /// Area-weighted RMS distance of the cluster's vertices from `centroid` (0 when they
@@ -51,6 +54,8 @@ pub struct ClusteredMesh {
     /// Joint weights of each sphere (summed vertex weights × areas, normalized): what moves
     /// the offset from the centroid to the centre.
     pub sphere_joints: Vec<Vec<(u16, f32)>>,
+    /// What the proxies are.
+    pub shape: super::ProxyShape,
 }
 
 /// Clusters the vertices of `mesh` that carry area into at most `count` clusters and fits a
@@ -100,7 +105,10 @@ pub fn cluster(mesh: &RestMesh, count: u32) -> ClusteredMesh {
             })
             .collect(),
     );
-    let mut clustered = ClusteredMesh::default();
+    let mut clustered = ClusteredMesh {
+        shape: super::ProxyShape::Spheres,
+        ..ClusteredMesh::default()
+    };
     for k in 0..centres.len() as u32 {
         let members: Vec<u32> = vertices
             .iter()
@@ -224,6 +232,7 @@ fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere>
     (radius > 1e-6 && radius.is_finite()).then_some(RestSphere {
         center,
         radius,
+        axes: Mat3::from_diagonal(Vec3::splat(radius)),
         centroid,
         spread,
     })
@@ -272,7 +281,7 @@ fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     a + ab * (vb * denom) + ac * (vc * denom)
 }
 
-fn sphere_joints(mesh: &RestMesh, members: &[u32]) -> Vec<(u16, f32)> {
+pub(crate) fn sphere_joints(mesh: &RestMesh, members: &[u32]) -> Vec<(u16, f32)> {
     let Some(skin) = &mesh.skin else {
         return Vec::new();
     };

@@ -1,21 +1,46 @@
-//! Far-field occlusion from spheres (Shanmugam & Arikan 2007, §5–6).
+//! Far-field occlusion from simple proxies that follow their meshes (Shanmugam & Arikan 2007,
+//! §5–6, with boxes in place of its spheres by default).
 //!
 //! Screen-space AO cannot see what is off-screen or behind the first surface, and its reach is
-//! a few pixels. Here each occluder mesh is approximated by a handful of spheres:
+//! a few pixels. Here each occluder mesh stands in for itself through a handful of proxies:
 //!
-//! 1. [`lloyd`]: once per mesh asset, Lloyd clustering of the area-weighted rest-pose vertices;
-//!    each cluster becomes a sphere inside the surface (cached; large meshes are clustered on
-//!    the async compute pool).
-//! 2. [`refit`]: every frame, after animation and transform propagation, the spheres follow the
-//!    skinned and morphed vertices of their cluster ([`OccluderSpheres`] holds the result).
-//! 3. The splat pass draws one billboard per sphere covering every pixel within d_far
-//!    ([`far_field_reach`], eq. 5) and adds A_ψ (eq. 2–3, 1 inside the sphere) into a far-field
-//!    buffer with additive blending; compose adds it to the near field and clamps (§6).
+//! 1. Once per mesh asset, [`fit`] covers the mesh's solid with a few oriented boxes (one for a
+//!    box, a wall or a floor, one per bone for a character, cut further where a box would be
+//!    mostly empty), or, as the paper does, [`lloyd`] clusters its area-weighted vertices into
+//!    spheres inside the surface ([`ProxyShape::Spheres`]). Large meshes are fitted on the async
+//!    compute pool.
+//! 2. Every frame, after animation and transform propagation, [`refit`] moves the proxies with
+//!    the skinned and morphed vertices ([`OccluderSpheres`] holds the result): a box is skinned
+//!    like a vertex with its bone weights and turns with its bones; a sphere follows the centroid
+//!    and spread of its cluster (§5.3).
+//! 3. The splat pass draws one billboard per proxy over every pixel its occlusion can reach and
+//!    writes the share of ambient light the proxy blocks (`shaders/proxy_occlusion.wgsl`):
+//!
+//!    - **What ground truth measures.** A box blocks the cosine-weighted solid angle of the faces
+//!      it turns to the receiver, integrated exactly (Lambert's formula for polygons) after
+//!      clipping each face to the receiver's tangent plane and to the part a ray shorter than the
+//!      camera's [`radius`](crate::DynamicAo::radius) R can meet; a sphere blocks the cap of
+//!      directions that meet it within R. The paper's cut-off (eq. 5: influence ends where it
+//!      falls below ε, and is unlimited before) is [`ProxyReach::Epsilon`].
+//!    - **Counted once.** Under [`FarFieldBlend::CountOnce`](crate::FarFieldBlend::CountOnce)
+//!      the part of a proxy within the near field's reach goes to one channel, left out where
+//!      the ND-buffer holds it (the near field counts that), and the part beyond goes to another.
+//!    - **Together.** Proxies multiply their visibilities per channel, and the buffer also keeps
+//!      the largest single occlusion. Proxies of one object stand one behind another (an arm
+//!      before the torso), so the product counts hidden parts too; compose takes the union
+//!      halfway between the largest proxy and the product. Measured against the proxies
+//!      themselves ray-traced, on the floor around characters and a helmet: that rule is within
+//!      15 % where the product was 40–80 % over.
+//!
+//! How well the proxies stand for their meshes, measured (`fit` and `far_field` tests): a box
+//! and a wall within 1.5 % of the mesh's own occlusion at a distance, a ball 9 % over, a 3 cm
+//! rod 20 % over, the project's skinned walker 6–7 % over on the floor around it.
 //!
 //! Add [`SphereOccluder`] to a mesh entity or a scene root. The camera's
 //! [`DynamicAo::spheres`](crate::DynamicAo::spheres) switches the far field on or off per view.
 
 mod component;
+pub mod fit;
 #[cfg(feature = "gizmos")]
 mod gizmos;
 pub mod lloyd;
@@ -32,7 +57,9 @@ use bevy::ecs::prelude::*;
 use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
 use bevy::transform::TransformSystems;
 
-pub use component::{OccluderSphere, OccluderSpheres, SphereOccluder, far_field_reach};
+pub use component::{
+    OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, SphereOccluder, far_field_reach,
+};
 #[cfg(feature = "gizmos")]
 pub use gizmos::ShowOccluderSpheres;
 pub use systems::ASYNC_CLUSTERING_VERTICES;
@@ -54,6 +81,8 @@ impl Plugin for SphereOccluderPlugin {
         embedded_asset!(app, "splat.wgsl");
         app.register_type::<SphereOccluder>()
             .register_type::<OccluderSpheres>()
+            .register_type::<ProxyShape>()
+            .register_type::<ProxyReach>()
             .init_resource::<systems::SphereCache>()
             .add_systems(
                 PostUpdate,

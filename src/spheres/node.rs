@@ -1,8 +1,9 @@
-//! The pass that splats the spheres of every occluder into a view's far-field buffer.
+//! The pass that splats the proxies of every occluder into a view's far-field visibility buffer.
 
 use bevy::ecs::prelude::*;
 use bevy::render::{
     diagnostic::RecordDiagnostics,
+    extract_component::DynamicUniformIndex,
     render_resource::{
         LoadOp, Operations, PipelineCache, RenderPassColorAttachment, RenderPassDescriptor, StoreOp,
     },
@@ -11,7 +12,7 @@ use bevy::render::{
 };
 
 use super::splat::{SphereBuffer, SplatBindGroup, SplatPipeline};
-use crate::view::{DynamicAoTextures, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn splat_pass(
     view: ViewQuery<(
@@ -19,27 +20,30 @@ pub(crate) fn splat_pass(
         &DynamicAoTextures,
         Option<&SplatBindGroup>,
         &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
     )>,
     pipeline: Res<SplatPipeline>,
     pipeline_cache: Res<PipelineCache>,
     spheres: Res<SphereBuffer>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset) = view.into_inner();
+    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
     if !ao_view.far_field {
         return;
     }
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
-    // Cleared even without spheres: compose reads this buffer whenever the far field is on.
+    // Visibility starts at 1 (open) and each proxy multiplies it down; the largest occlusion (alpha)
+    // starts at 0. Cleared even without proxies, because compose reads this buffer whenever the
+    // far field is on.
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
         label: Some("dynamic_ao_spheres"),
         color_attachments: &[Some(RenderPassColorAttachment {
-            view: &textures.far_occlusion.default_view,
+            view: &textures.sphere_visibility.default_view,
             depth_slice: None,
             resolve_target: None,
             ops: Operations {
-                load: LoadOp::Clear(Default::default()),
+                load: LoadOp::Clear(bevy::color::LinearRgba::new(1.0, 1.0, 1.0, 0.0).into()),
                 store: StoreOp::Store,
             },
         })],
@@ -54,7 +58,11 @@ pub(crate) fn splat_pass(
         && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline.pipeline)
     {
         pass.set_render_pipeline(render_pipeline);
-        pass.set_bind_group(0, &bind_group.0, &[view_offset.offset]);
+        pass.set_bind_group(
+            0,
+            &bind_group.0,
+            &[view_offset.offset, settings_index.index()],
+        );
         pass.draw(0..6, 0..spheres.count);
     }
     pass_span.end(&mut pass);

@@ -8,7 +8,7 @@
 //! moves exactly with that joint, and one that stretches grows with it. The cost is one skinning
 //! per vertex plus a few additions: linear in the vertex count.
 
-use bevy::math::{Affine3A, Mat3A, Vec3, Vec3A};
+use bevy::math::{Affine3A, Mat3, Mat3A, Vec3, Vec3A};
 
 use super::OccluderSphere;
 use super::lloyd::ClusteredMesh;
@@ -40,12 +40,17 @@ pub fn refit(
     if Deformer::is_rigid(mesh, pose) {
         // A rigid mesh: its spheres move with it and no vertex needs touching.
         let scale = max_axis_scale(pose.world_from_mesh.matrix3);
+        let linear = Mat3::from(pose.world_from_mesh.matrix3);
         for s in &clustered.spheres {
             push_finite(
                 out,
                 &mut dropped,
-                pose.world_from_mesh.transform_point3(s.center),
-                s.radius * scale,
+                OccluderSphere {
+                    center: pose.world_from_mesh.transform_point3(s.center),
+                    radius: s.radius * scale,
+                    axes: linear * s.axes,
+                    shape: clustered.shape,
+                },
             );
         }
         return dropped;
@@ -84,14 +89,51 @@ pub fn refit(
             }
             None => pose.world_from_mesh.matrix3,
         };
-        let center = Vec3::from(centroid + linear * Vec3A::from(rest.center - rest.centroid));
-        let radius = if rest.spread > 1e-4 * rest.radius {
-            rest.radius * spread / rest.spread
+        let mut center = Vec3::from(centroid + linear * Vec3A::from(rest.center - rest.centroid));
+        if skin.is_some() && clustered.shape == super::ProxyShape::Boxes {
+            // Skinned like a vertex with the box's joint weights, so a box on one bone moves
+            // exactly with it.
+            let mut skinned = Vec3A::ZERO;
+            for &(joint, w) in &clustered.sphere_joints[i] {
+                let joint = pose
+                    .joints
+                    .get(joint as usize)
+                    .unwrap_or(&Affine3A::IDENTITY);
+                skinned += joint.transform_point3a(Vec3A::from(rest.center)) * w;
+            }
+            center = Vec3::from(skinned);
+        }
+        let ratio = if rest.spread > 1e-4 * rest.radius {
+            spread / rest.spread
         } else {
             // Coinciding vertices carry no size; the joints' scale does.
-            rest.radius * max_axis_scale(linear)
+            max_axis_scale(linear)
         };
-        push_finite(out, &mut dropped, center, radius);
+        // A sphere's size follows the spread of its vertices (S&A §5.3). A box follows its
+        // joints' blended matrix: turned, stretched and scaled with them, so one on a single
+        // bone moves exactly with it (the spread of its vertices would grow as neighbouring parts
+        // bend away).
+        let axes = match clustered.shape {
+            super::ProxyShape::Spheres => rest.axes * ratio,
+            super::ProxyShape::Boxes => Mat3::from(linear) * rest.axes,
+        };
+        let radius = match clustered.shape {
+            super::ProxyShape::Spheres => rest.radius * ratio,
+            super::ProxyShape::Boxes => (axes.x_axis.length_squared()
+                + axes.y_axis.length_squared()
+                + axes.z_axis.length_squared())
+            .sqrt(),
+        };
+        push_finite(
+            out,
+            &mut dropped,
+            OccluderSphere {
+                center,
+                radius,
+                axes,
+                shape: clustered.shape,
+            },
+        );
     }
     dropped
 }
@@ -140,29 +182,55 @@ impl<'a> Deformer<'a> {
             p += Vec3A::from(mesh.morph_positions[target * vertex_count + v]) * weight;
         }
         match self.skin {
-            Some(skin) => {
-                let s = &skin[v];
-                let mut q = Vec3A::ZERO;
-                for k in 0..4 {
-                    if s.weights[k] > 0.0 {
-                        let joint = self
-                            .pose
-                            .joints
-                            .get(s.joints[k] as usize)
-                            .unwrap_or(&Affine3A::IDENTITY);
-                        q += joint.transform_point3a(p) * s.weights[k];
-                    }
-                }
-                q
-            }
+            Some(_) => self
+                .joints_of(v)
+                .map(|(joint, weight)| joint.transform_point3a(p) * weight)
+                .sum(),
             None => self.pose.world_from_mesh.transform_point3a(p),
         }
     }
+
+    /// The joints that move skinned vertex `v` with their (positive) weights; a joint index past
+    /// the pose's joints stands still.
+    fn joints_of(&self, v: usize) -> impl Iterator<Item = (&Affine3A, f32)> {
+        let skin = self.skin.map(|skin| &skin[v]);
+        (0..4).filter_map(move |k| {
+            let s = skin?;
+            (s.weights[k] > 0.0).then(|| {
+                let joint = self
+                    .pose
+                    .joints
+                    .get(s.joints[k] as usize)
+                    .unwrap_or(&Affine3A::IDENTITY);
+                (joint, s.weights[k])
+            })
+        })
+    }
+
+    /// World-space unit normal of vertex `v` (zero where the mesh gives none): the rest normal
+    /// turned by the inverse transpose of the blended skin matrix, or of `world_from_mesh`.
+    /// Morph targets do not move normals here.
+    pub fn normal(&self, v: usize) -> Vec3A {
+        let Some(&n) = self.mesh.normals.get(v) else {
+            return Vec3A::ZERO;
+        };
+        let linear = match self.skin {
+            Some(_) => self
+                .joints_of(v)
+                .fold(Mat3A::ZERO, |m, (joint, weight)| m + joint.matrix3 * weight),
+            None => self.pose.world_from_mesh.matrix3,
+        };
+        (linear.inverse().transpose() * Vec3A::from(n)).normalize_or_zero()
+    }
 }
 
-fn push_finite(out: &mut Vec<OccluderSphere>, dropped: &mut usize, center: Vec3, radius: f32) {
-    if center.is_finite() && radius.is_finite() && radius > 0.0 {
-        out.push(OccluderSphere { center, radius });
+fn push_finite(out: &mut Vec<OccluderSphere>, dropped: &mut usize, proxy: OccluderSphere) {
+    if proxy.center.is_finite()
+        && proxy.radius.is_finite()
+        && proxy.radius > 0.0
+        && proxy.axes.is_finite()
+    {
+        out.push(proxy);
     } else {
         *dropped += 1;
     }

@@ -1,4 +1,4 @@
-//! Render-world side of the far field: the spheres of every occluder in one storage buffer, the
+//! Render-world side of the far field: the proxies of every occluder in one storage buffer, the
 //! billboard pipeline, and the per-view bind groups.
 
 use bevy::asset::load_embedded_asset;
@@ -7,6 +7,7 @@ use bevy::ecs::prelude::*;
 use bevy::math::Vec4;
 use bevy::render::{
     Extract,
+    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{
             storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
@@ -18,11 +19,12 @@ use bevy::render::{
 };
 use bevy::utils::default;
 
-use super::component::{OccluderSpheres, far_field_reach};
-use crate::view::{DynamicAoView, FAR_OCCLUSION_FORMAT};
+use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT};
 
-/// One sphere as the shader reads it: centre and radius, then d_far.
-type GpuSphere = [Vec4; 2];
+/// One proxy as `splat.wgsl` reads it: centre and bounding radius, the three half-extent vectors,
+/// then the kind (0 box, 1 sphere) and eq. 5's d_far (0: the camera's radius).
+type GpuSphere = [Vec4; 5];
 
 /// Every sphere of every occluder this frame, in one buffer all views share.
 #[derive(Resource)]
@@ -46,18 +48,28 @@ pub(crate) fn extract_spheres(
 ) {
     buffer.buffer.clear();
     for occluder in &occluders {
-        for sphere in &occluder.spheres {
-            let reach = far_field_reach(sphere.radius, occluder.epsilon);
+        for proxy in &occluder.spheres {
+            let d_far = match occluder.reach {
+                ProxyReach::CameraRadius => 0.0,
+                ProxyReach::Epsilon(epsilon) => far_field_reach(proxy.radius, epsilon),
+            };
+            let kind = match proxy.shape {
+                ProxyShape::Boxes => 0.0,
+                ProxyShape::Spheres => 1.0,
+            };
             buffer.buffer.push([
-                sphere.center.extend(sphere.radius),
-                Vec4::new(reach, 0.0, 0.0, 0.0),
+                proxy.center.extend(proxy.radius),
+                proxy.axes.x_axis.extend(0.0),
+                proxy.axes.y_axis.extend(0.0),
+                proxy.axes.z_axis.extend(0.0),
+                Vec4::new(kind, d_far, 0.0, 0.0),
             ]);
         }
     }
     buffer.count = buffer.buffer.len() as u32;
     if buffer.count == 0 {
         // A binding needs a buffer; nothing is drawn from it.
-        buffer.buffer.push([Vec4::ZERO; 2]);
+        buffer.buffer.push([Vec4::ZERO; 5]);
     }
 }
 
@@ -69,7 +81,8 @@ pub(crate) fn write_sphere_buffer(
     buffer.buffer.write_buffer(&device, &queue);
 }
 
-/// The billboard pipeline: instanced quads, additive blending into the far-field buffer.
+/// The billboard pipeline: instanced quads, multiplying the far-field visibility buffer by
+/// 1 − each proxy's occlusion.
 #[derive(Resource)]
 pub(crate) struct SplatPipeline {
     layout: BindGroupLayoutDescriptor,
@@ -87,14 +100,23 @@ impl FromWorld for SplatPipeline {
                     storage_buffer_read_only_sized(false, None),
                     texture_depth_2d(),
                     texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_depth_2d(),
+                    uniform_buffer::<DynamicAoUniform>(true),
                 ),
             ),
         );
         let shader = load_embedded_asset!(world, "splat.wgsl");
-        let additive = BlendComponent {
+        // dst × (1 − src): occluders multiply their visibilities.
+        let multiply = BlendComponent {
+            src_factor: BlendFactor::Zero,
+            dst_factor: BlendFactor::OneMinusSrc,
+            operation: BlendOperation::Add,
+        };
+        // max(dst, src): the largest single occlusion, for the union estimate in compose.
+        let largest = BlendComponent {
             src_factor: BlendFactor::One,
             dst_factor: BlendFactor::One,
-            operation: BlendOperation::Add,
+            operation: BlendOperation::Max,
         };
         let pipeline =
             world
@@ -111,10 +133,10 @@ impl FromWorld for SplatPipeline {
                         targets: vec![Some(ColorTargetState {
                             format: FAR_OCCLUSION_FORMAT,
                             blend: Some(BlendState {
-                                color: additive,
-                                alpha: additive,
+                                color: multiply,
+                                alpha: largest,
                             }),
-                            write_mask: ColorWrites::RED,
+                            write_mask: ColorWrites::RED | ColorWrites::GREEN | ColorWrites::ALPHA,
                         })],
                         ..default()
                     }),
@@ -133,15 +155,23 @@ pub(crate) fn prepare_splat_bind_groups(
     pipeline: Res<SplatPipeline>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
+    settings: Res<ComponentUniforms<DynamicAoUniform>>,
     spheres: Res<SphereBuffer>,
-    views: Query<(Entity, &DynamicAoView, &ViewPrepassTextures)>,
+    views: Query<(
+        Entity,
+        &DynamicAoView,
+        &DynamicAoTextures,
+        &ViewPrepassTextures,
+    )>,
 ) {
-    let (Some(view_binding), Some(sphere_binding)) =
-        (view_uniforms.uniforms.binding(), spheres.buffer.binding())
-    else {
+    let (Some(view_binding), Some(sphere_binding), Some(settings_binding)) = (
+        view_uniforms.uniforms.binding(),
+        spheres.buffer.binding(),
+        settings.binding(),
+    ) else {
         return;
     };
-    for (entity, view, prepass) in &views {
+    for (entity, view, textures, prepass) in &views {
         let (true, Some(depth), Some(normal)) =
             (view.far_field, prepass.depth_view(), prepass.normal_view())
         else {
@@ -156,6 +186,8 @@ pub(crate) fn prepare_splat_bind_groups(
                 sphere_binding.clone(),
                 depth,
                 normal,
+                &textures.back_depth.default_view,
+                settings_binding.clone(),
             )),
         );
         commands.entity(entity).insert(SplatBindGroup(bind_group));

@@ -1,27 +1,37 @@
-// Distant-occluder splatting (Shanmugam & Arikan 2007, §5.2): one billboard per sphere covers
-// every pixel whose surface point can lie within d_far (eq. 5) of the sphere; the fragment reads
-// the ND-buffer and adds A_ψ (eq. 2–3, 1 inside the sphere) into the far-field buffer through
-// additive blending. `reference::spheres` is the CPU twin.
+// Distant-occluder splatting (Shanmugam & Arikan 2007, §5.2): one billboard per proxy covers
+// every pixel whose surface point its occlusion can reach (the proxy's bounding sphere grown by
+// the camera's radius R, or by eq. 5's d_far under `ProxyReach::Epsilon`); the fragment reads the
+// ND-buffer and multiplies the visibility buffer by 1 − the proxy's occlusion
+// (`proxy_occlusion`), per channel. Counted once: under `FarFieldBlend::CountOnce` the part of the
+// proxy within the near field's reach goes to the red channel where the ND-buffer does not hold it
+// (the near field counts the rest of that part), the part beyond to the green one.
+// `reference::spheres` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
-#import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
+#import bevy_dynamic_ao::proxy_occlusion::{face_normal, face_occlusion, sphere_occlusion_within}
+#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::cap_occlusion::share_beyond
 
-struct Sphere {
-    // Centre (world space, metres) and radius (metres).
-    center_radius: vec4<f32>,
-    // x: d_far, metres.
-    reach: vec4<f32>,
+struct Proxy {
+    // Centre (world space, metres) and the radius of a sphere holding the whole proxy.
+    centre_bound: vec4<f32>,
+    // Half-extent vectors of a box (world space, metres); a sphere's radius × the identity.
+    axes: array<vec4<f32>, 3>,
+    // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius.
+    kind: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(1) var<storage, read> proxies: array<Proxy>;
 @group(0) @binding(2) var front_depth: texture_depth_2d;
 @group(0) @binding(3) var front_normal: texture_2d<f32>;
+@group(0) @binding(4) var back_depth: texture_depth_2d;
+@group(0) @binding(5) var<uniform> settings: DynamicAoSettings;
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
-    @location(0) @interpolate(flat) sphere: u32,
+    @location(0) @interpolate(flat) proxy: u32,
 }
 
 // The screen rectangle (NDC min.xy, max.xy) of the sphere of radius `reach` around the view-space
@@ -61,29 +71,105 @@ fn reach_rectangle(center: vec3<f32>, reach: f32) -> vec4<f32> {
     return vec4<f32>(min(a, b), max(a, b));
 }
 
+// How far from its centre a proxy's occlusion reaches, metres.
+fn influence(proxy: Proxy) -> f32 {
+    if proxy.kind.y > 0.0 {
+        return proxy.kind.y;
+    }
+    return proxy.centre_bound.w + settings.far_radius;
+}
+
 @vertex
 fn vertex(
     @builtin(vertex_index) vertex_index: u32,
     @builtin(instance_index) instance_index: u32,
 ) -> VertexOutput {
-    let sphere = spheres[instance_index];
-    let reach = sphere.reach.x;
-    let center = (view.view_from_world * vec4<f32>(sphere.center_radius.xyz, 1.0)).xyz;
-
-    let bounds = reach_rectangle(center, reach);
-    var lo = bounds.xy;
-    var hi = bounds.zw;
-    lo = clamp(lo, vec2<f32>(-1.0), vec2<f32>(1.0));
-    hi = clamp(hi, vec2<f32>(-1.0), vec2<f32>(1.0));
-
+    let proxy = proxies[instance_index];
+    let center = (view.view_from_world * vec4<f32>(proxy.centre_bound.xyz, 1.0)).xyz;
+    let bounds = reach_rectangle(center, influence(proxy));
+    let lo = clamp(bounds.xy, vec2<f32>(-1.0), vec2<f32>(1.0));
+    let hi = clamp(bounds.zw, vec2<f32>(-1.0), vec2<f32>(1.0));
     var corners = array<vec2<f32>, 6>(
         vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(0.0, 1.0),
         vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),
     );
     var out: VertexOutput;
     out.position = vec4<f32>(mix(lo, hi, corners[vertex_index]), 0.0, 1.0);
-    out.sphere = instance_index;
+    out.proxy = instance_index;
     return out;
+}
+
+// How much of the near field's share the ND-buffer holds at `x`.
+fn held(x: vec3<f32>, tolerance: f32) -> f32 {
+    return nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, x, tolerance);
+}
+
+// The proxy's occlusion within `reach`, in two parts: x, the part within the near field's reach
+// where the ND-buffer does not hold it; y, the part beyond the near field's reach, as a share of
+// the directions the near part leaves open (the two parts cover different directions, so they
+// join back into the whole as 1 − (1 − x)(1 − y)). Where the far field counts every occluder, y is
+// all of it.
+fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
+    let near = settings.far_near_radius;
+    let tolerance = 0.1 * near;
+    let centre = proxy.centre_bound.xyz;
+    if proxy.kind.x != 0.0 {
+        let radius = length(proxy.axes[0].xyz);
+        let all = sphere_occlusion_within(p, n, centre, radius, reach);
+        if near > 0.0 {
+            let inner = sphere_occlusion_within(p, n, centre, radius, near);
+            return vec2<f32>(
+                inner * (1.0 - held(centre, radius + tolerance)),
+                share_beyond(all, inner),
+            );
+        }
+        return vec2<f32>(0.0, all);
+    }
+    var occlusion = vec2<f32>(0.0);
+    // Nothing to do where the whole box lies beyond reach.
+    var outside = vec3<f32>(0.0);
+    for (var i = 0u; i < 3u; i++) {
+        let half = length(proxy.axes[i].xyz);
+        let along = select(0.0, dot(p - centre, proxy.axes[i].xyz) / half, half > 0.0);
+        outside[i] = max(abs(along) - half, 0.0);
+    }
+    if reach > 0.0 && length(outside) >= reach {
+        return occlusion;
+    }
+    // Where R is no longer than the near field's reach (the defaults), the whole and the near
+    // part are the same.
+    let one_part = near > 0.0 && reach > 0.0 && reach <= near;
+    // A receiver must lie clearly in front of a face: on a flat box's own plane (a floor under
+    // its own receivers) depth precision would otherwise put it just behind one face, under the
+    // other, which then covers its whole sky.
+    let margin = 1e-4 + 1e-3 * proxy.centre_bound.w;
+    for (var i = 0u; i < 3u; i++) {
+        let a = proxy.axes[i].xyz;
+        let b = proxy.axes[(i + 1u) % 3u].xyz;
+        let c = proxy.axes[(i + 2u) % 3u].xyz;
+        let normal = face_normal(a, b, c);
+        for (var s = 0u; s < 2u; s++) {
+            let side = f32(s) * 2.0 - 1.0;
+            let f = normal * side;
+            let face_centre = centre + a * side;
+            if dot(f, p - face_centre) <= margin {
+                continue;
+            }
+            if near <= 0.0 {
+                occlusion.y += face_occlusion(p, n, face_centre, f, b, c, reach).occlusion;
+                continue;
+            }
+            let inner = face_occlusion(p, n, face_centre, f, b, c, select(near, min(near, reach), reach > 0.0));
+            if inner.occlusion > 0.0 {
+                occlusion.x += inner.occlusion * (1.0 - held(inner.centre, tolerance));
+            }
+            if !one_part {
+                let all = face_occlusion(p, n, face_centre, f, b, c, reach).occlusion;
+                occlusion.y += share_beyond(all, inner.occlusion);
+            }
+        }
+    }
+    return occlusion;
 }
 
 @fragment
@@ -95,13 +181,18 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         // Background: nothing receives occlusion.
         discard;
     }
-    let sphere = spheres[in.sphere];
+    let proxy = proxies[in.proxy];
     let size = vec2<f32>(textureDimensions(front_depth));
     let p = world_position(view, pixel, size, depth);
-    if distance(p, sphere.center_radius.xyz) > sphere.reach.x {
-        // Below ε: cut off, as eq. 5 defines the reach.
-        discard;
+    var reach = settings.far_radius;
+    if proxy.kind.y > 0.0 {
+        // Eq. 5: cut off beyond d_far, unlimited within.
+        if distance(p, proxy.centre_bound.xyz) > proxy.kind.y {
+            discard;
+        }
+        reach = 0.0;
     }
-    let a = sphere_occlusion(sphere.center_radius.xyz, sphere.center_radius.w, p, normal);
-    return vec4<f32>(a, 0.0, 0.0, 0.0);
+    let occlusion = clamp(proxy_occlusion(proxy, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
+    // Alpha keeps the largest single proxy's occlusion (blended with max).
+    return vec4<f32>(occlusion, 0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y));
 }

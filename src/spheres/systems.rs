@@ -15,7 +15,8 @@ use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::{Children, GlobalTransform, Name};
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
-use super::component::{OccluderSpheres, SphereOccluder};
+use super::component::{OccluderSpheres, ProxyShape, SphereOccluder};
+use super::fit::fit_boxes;
 use super::lloyd::{ClusteredMesh, cluster};
 use super::refit::{Pose, refit};
 use super::rest_mesh::{RestMesh, SphereMeshError};
@@ -34,17 +35,26 @@ pub(crate) struct FittedMesh {
 
 type FitResult = Result<Arc<FittedMesh>, SphereMeshError>;
 
-/// Clustering results per (mesh asset, sphere count), and the clusterings still running.
+type FitKey = (AssetId<Mesh>, u32, ProxyShape);
+
+/// Fitting results per (mesh asset, proxy count, shape), and the fits still running.
 #[derive(Resource, Default)]
 pub(crate) struct SphereCache {
-    ready: HashMap<(AssetId<Mesh>, u32), FitResult>,
-    pending: HashMap<(AssetId<Mesh>, u32), Task<FitResult>>,
+    ready: HashMap<FitKey, FitResult>,
+    pending: HashMap<FitKey, Task<FitResult>>,
 }
 
 impl SphereCache {
-    /// The clustering of `id` for `count` spheres: started if new, `None` while it runs.
-    fn get(&mut self, id: AssetId<Mesh>, count: u32, meshes: &Assets<Mesh>) -> Option<FitResult> {
-        let key = (id, count);
+    /// The fit of `id` with at most `count` proxies of `shape`: started if new, `None` while it
+    /// runs.
+    fn get(
+        &mut self,
+        id: AssetId<Mesh>,
+        count: u32,
+        shape: ProxyShape,
+        meshes: &Assets<Mesh>,
+    ) -> Option<FitResult> {
+        let key = (id, count, shape);
         if let Some(result) = self.ready.get(&key) {
             return Some(result.clone());
         }
@@ -63,24 +73,28 @@ impl SphereCache {
             }
         };
         if rest.positions.len() > ASYNC_CLUSTERING_VERTICES {
-            let task = AsyncComputeTaskPool::get().spawn(async move { Ok(fit(rest, count)) });
+            let task =
+                AsyncComputeTaskPool::get().spawn(async move { Ok(fit(rest, count, shape)) });
             self.pending.insert(key, task);
             return None;
         }
-        let result: FitResult = Ok(fit(rest, count));
+        let result: FitResult = Ok(fit(rest, count, shape));
         self.ready.insert(key, result.clone());
         Some(result)
     }
 
     /// Forgets every clustering of a mesh whose asset changed or went away.
     fn forget(&mut self, id: AssetId<Mesh>) {
-        self.ready.retain(|(mesh, _), _| *mesh != id);
-        self.pending.retain(|(mesh, _), _| *mesh != id);
+        self.ready.retain(|(mesh, ..), _| *mesh != id);
+        self.pending.retain(|(mesh, ..), _| *mesh != id);
     }
 }
 
-fn fit(mesh: RestMesh, count: u32) -> Arc<FittedMesh> {
-    let clustered = cluster(&mesh, count);
+fn fit(mesh: RestMesh, count: u32, shape: ProxyShape) -> Arc<FittedMesh> {
+    let clustered = match shape {
+        ProxyShape::Boxes => fit_boxes(&mesh, count),
+        ProxyShape::Spheres => cluster(&mesh, count),
+    };
     let clusterable_vertices = mesh.areas.iter().filter(|a| **a > 0.0).count();
     Arc::new(FittedMesh {
         mesh,
@@ -174,9 +188,9 @@ pub(crate) fn refit_spheres(
         };
         let mut out = OccluderSpheres {
             spheres: Vec::new(),
-            epsilon: occluder.epsilon,
+            reach: occluder.reach,
         };
-        let fitted = match cache.get(mesh3d.id(), occluder.count, &meshes) {
+        let fitted = match cache.get(mesh3d.id(), occluder.count, occluder.shape, &meshes) {
             Some(Ok(fitted)) => Some(fitted),
             Some(Err(error)) => {
                 warn_once(Problem::Unusable, &|| {
@@ -189,7 +203,9 @@ pub(crate) fn refit_spheres(
         if let Some(fitted) = fitted
             && visibility.is_none_or(|v| v.get())
         {
-            if fitted.clusterable_vertices < occluder.count as usize {
+            if occluder.shape == ProxyShape::Spheres
+                && fitted.clusterable_vertices < occluder.count as usize
+            {
                 warn_once(Problem::FewVertices, &|| {
                     format!(
                         "asks for {} spheres but has only {} usable vertices; it gets {}",

@@ -50,18 +50,19 @@ pub(crate) struct GpuVolume {
     /// Cells per axis; 0 marks an unused slot.
     pub resolution: u32,
     pub rays: u32,
+    /// Evenly spaced tests per ray; 0: every cell the ray crosses.
     pub steps: u32,
     /// cos of the cone half-angle the rays fill.
     pub cos_spread: f32,
-    /// Metres.
+    /// Metres; 0: the camera's radius.
     pub d_max: f32,
     /// How far rays start off the surface, metres: one voxel diagonal, so a ray never tests
     /// the voxels its own surface occupies.
     pub bias: f32,
     /// Size of the world-space cells the ray jitter is constant over, metres.
     pub noise_cell: f32,
-    /// d_max + bias in cells, per grid axis: how far outside the grid a surface can be lit.
-    pub reach: [f32; 3],
+    /// World-space size of one cell along each grid axis, metres.
+    pub cell: [f32; 3],
     /// Bit 0: the occupied voxels are drawn (`ShowOccupiedVoxels`); bit 1: hits count without
     /// falloff (`VoxelFalloff::None`).
     pub flags: u32,
@@ -96,12 +97,15 @@ impl GpuVolume {
                 offset,
                 resolution: volume.resolution,
                 rays: rays.rays,
-                steps: rays.steps,
+                steps: match rays.march {
+                    super::VoxelMarch::Cells => 0,
+                    super::VoxelMarch::Steps(steps) => steps,
+                },
                 cos_spread: rays.cos_spread,
-                d_max: rays.d_max,
+                d_max: rays.d_max.unwrap_or(0.0),
                 bias: rays.bias,
                 noise_cell: rays.noise_cell,
-                reach: rays.reach.to_array(),
+                cell: rays.cell.to_array(),
                 flags: u32::from(show) | (u32::from(rays.falloff == VoxelFalloff::None) << 1),
             },
             grid_from_world,

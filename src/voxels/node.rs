@@ -36,9 +36,9 @@ pub(crate) fn voxel_pass(
         camera.physical_viewport_size,
         pipeline_cache.get_compute_pipeline(pipelines.voxelize),
         pipeline_cache.get_compute_pipeline(pipelines.sample),
-        pipeline_cache.get_compute_pipeline(blur.upsample),
-        pipeline_cache.get_compute_pipeline(blur.x),
-        pipeline_cache.get_compute_pipeline(blur.y),
+        pipeline_cache.get_compute_pipeline(blur.two.upsample),
+        pipeline_cache.get_compute_pipeline(blur.two.x),
+        pipeline_cache.get_compute_pipeline(blur.two.y),
     ) else {
         return;
     };
@@ -87,7 +87,11 @@ pub(crate) fn voxel_pass(
             timestamp_writes: None,
         });
         pass.set_pipeline(sample);
-        pass.set_bind_group(0, &bind_groups.sample, &[view_offset.offset]);
+        pass.set_bind_group(
+            0,
+            &bind_groups.sample,
+            &[view_offset.offset, settings_index.index()],
+        );
         pass.dispatch_workgroups(half.x.div_ceil(8), half.y.div_ceil(8), 1);
     }
     time_span.end(ctx.command_encoder());

@@ -25,8 +25,8 @@ use bytemuck::Zeroable;
 
 use super::component::{VoxelGridReadback, grid_words};
 use super::gather::{GpuVolume, GridTriangle, VoxelFrame};
-use crate::filter::BlurPipelines;
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
+use crate::filter::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
 
 /// Counts of this frame's buffers (`VoxelParams` in `voxel_grid.wgsl`).
 #[derive(ShaderType, Clone, Copy, Debug, Default)]
@@ -248,8 +248,10 @@ impl FromWorld for VoxelPipelines {
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     storage_buffer_read_only_sized(false, None),
                     storage_buffer_read_only_sized(false, None),
-                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
+                    texture_storage_2d(OCCLUSION_PAIR_FORMAT, StorageTextureAccess::WriteOnly),
                     uniform_buffer::<VoxelParams>(false),
+                    uniform_buffer::<DynamicAoUniform>(true),
+                    texture_depth_2d(),
                 ),
             ),
         );
@@ -347,11 +349,13 @@ pub(crate) fn prepare_voxel_bind_groups(
                 grid.as_entire_binding(),
                 &low.default_view,
                 params.clone(),
+                settings_binding.clone(),
+                &textures.back_depth.default_view,
             )),
         );
         let upsample = render_device.create_bind_group(
             "dynamic_ao_voxel_upsample_bind_group",
-            &pipeline_cache.get_bind_group_layout(&blur.upsample_layout),
+            &pipeline_cache.get_bind_group_layout(&blur.two.upsample_layout),
             &BindGroupEntries::sequential((
                 view_binding.clone(),
                 settings_binding.clone(),
@@ -361,7 +365,7 @@ pub(crate) fn prepare_voxel_bind_groups(
                 &full.default_view,
             )),
         );
-        let blur_layout = pipeline_cache.get_bind_group_layout(&blur.layout);
+        let blur_layout = pipeline_cache.get_bind_group_layout(&blur.two.layout);
         let blur_pass = |label, input: &TextureView, output: &TextureView| {
             render_device.create_bind_group(
                 label,
@@ -375,7 +379,7 @@ pub(crate) fn prepare_voxel_bind_groups(
                 )),
             )
         };
-        let scratch = &textures.blur_scratch.default_view;
+        let scratch = &textures.voxel_scratch.as_ref().unwrap_or(full).default_view;
         let blur = view.voxel_blur.then(|| {
             (
                 blur_pass("dynamic_ao_voxel_blur_x", &full.default_view, scratch),

@@ -1,17 +1,24 @@
 // Ambient occlusion sampled in the voxel grids (Reinbothe, Boubekeur & Alexa 2009, §6, eq. 2
 // and 4), one value per pixel of a half-resolution AO map. Each pixel traces `rays` rays over its
 // hemisphere (a cone of `spread`), jittered by a hash of its world-space position so the pattern
-// sticks to surfaces when the camera moves; every ray tests `steps` evenly spaced points up to
-// d_max and the first occupied cell counts with the Wendland weight of its distance (eq. 3) and
-// the cosine to the normal (or fully, with `VoxelFalloff::None`). The sum is normalized by the sum of the cosines, so a surface
-// enclosed at distance 0 reads 1. Where volumes overlap, the largest occlusion wins.
-// `reference::voxels::voxel_occlusion` is the CPU twin.
+// sticks to surfaces when the camera moves. A ray is blocked by the first occupied cell closer
+// than the reach (the camera's radius R unless the volume sets d_max): by default found by
+// walking every cell the ray crosses, or, as the paper does, by `steps` evenly spaced tests. A
+// blocked ray counts with the cosine to the normal, fully (what ground truth measures) or with
+// Wendland's weight of its distance (eq. 3). The sum is normalized by the sum of the cosines, so a
+// surface enclosed at distance 0 reads 1. Counted once: under `FarFieldBlend::CountOnce` hits
+// closer than the near field's reach go to the first channel unless the ND-buffer holds them
+// (the near field counts those), farther ones to the second, as a share of the rays the near
+// ones leave open. Where volumes overlap, the largest occlusion wins, per channel. `reference::voxels::volume_occlusion` is the CPU
+// twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::settings::DynamicAoSettings
 #import bevy_dynamic_ao::voxel_grid::{
-    VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, tangent_frame, to_grid, unit_float, wendland,
+    VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, tangent_frame, to_grid,
+    to_grid_direction, unit_float, wendland,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -19,11 +26,13 @@
 @group(0) @binding(2) var normal_texture: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> volumes: array<VoxelVolume>;
 @group(0) @binding(4) var<storage, read> grid: array<u32>;
-@group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
+@group(0) @binding(5) var output: texture_storage_2d<rg32float, write>;
 @group(0) @binding(6) var<uniform> params: VoxelParams;
+@group(0) @binding(7) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(8) var back_depth_texture: texture_depth_2d;
 
-fn occupied(volume: VoxelVolume, p: vec3<f32>) -> bool {
-    let i = cell_index(volume, vec3<i32>(floor(to_grid(volume, p))));
+fn occupied_cell(volume: VoxelVolume, c: vec3<i32>) -> bool {
+    let i = cell_index(volume, c);
     if i < 0 {
         return false;
     }
@@ -31,11 +40,84 @@ fn occupied(volume: VoxelVolume, p: vec3<f32>) -> bool {
     return ((grid[word] | grid[params.solid_offset + word]) & (1u << (u32(i) % 32u))) != 0u;
 }
 
-fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> f32 {
+fn occupied(volume: VoxelVolume, p: vec3<f32>) -> bool {
+    return occupied_cell(volume, vec3<i32>(floor(to_grid(volume, p))));
+}
+
+// 1 / v per component, with ±1e30 for components that are 0.
+fn safe_inverse(v: vec3<f32>) -> vec3<f32> {
+    let tiny = abs(v) < vec3<f32>(1e-20);
+    let s = select(sign(v), vec3<f32>(1.0), v == vec3<f32>(0.0));
+    return select(1.0 / v, s * 1e30, tiny);
+}
+
+// World distance along the ray to the first occupied cell it enters, walking every cell it
+// crosses (Amanatides & Woo 1987); −1 when none lies within `reach`.
+fn first_hit_cells(volume: VoxelVolume, origin: vec3<f32>, direction: vec3<f32>, reach: f32) -> f32 {
+    let g0 = to_grid(volume, origin);
+    let gd = to_grid_direction(volume, direction);
+    let inverse = safe_inverse(gd);
+    let n = f32(volume.resolution);
+    let t0 = -g0 * inverse;
+    let t1 = (vec3<f32>(n) - g0) * inverse;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    var t = max(max(max(near.x, near.y), near.z), 0.0);
+    let end = min(min(min(far.x, far.y), far.z), reach);
+    if t > end {
+        return -1.0;
+    }
+    let last = vec3<i32>(i32(volume.resolution) - 1);
+    var cell = clamp(vec3<i32>(floor(g0 + gd * t)), vec3<i32>(0), last);
+    let step = vec3<i32>(sign(gd));
+    let boundary = vec3<f32>(cell) + select(vec3<f32>(0.0), vec3<f32>(1.0), gd > vec3<f32>(0.0));
+    var next = (boundary - g0) * inverse;
+    let delta = abs(inverse);
+    for (var i = 0u; i < 3u * volume.resolution + 3u; i++) {
+        if occupied_cell(volume, cell) {
+            return t;
+        }
+        if next.x <= next.y && next.x <= next.z {
+            t = next.x;
+            next.x += delta.x;
+            cell.x += step.x;
+        } else if next.y <= next.z {
+            t = next.y;
+            next.y += delta.y;
+            cell.y += step.y;
+        } else {
+            t = next.z;
+            next.z += delta.z;
+            cell.z += step.z;
+        }
+        if t > end || any(cell < vec3<i32>(0)) || any(cell > last) {
+            return -1.0;
+        }
+    }
+    return -1.0;
+}
+
+// World distance of the first of `steps` evenly spaced tests (offset by `jitter`) that lands in
+// an occupied cell, the paper's march; −1 when none does.
+fn first_hit_steps(volume: VoxelVolume, origin: vec3<f32>, direction: vec3<f32>, reach: f32, jitter: f32) -> f32 {
+    for (var s = 0u; s < volume.steps; s++) {
+        let t = reach * (f32(s) + jitter) / f32(volume.steps);
+        if occupied(volume, origin + direction * t) {
+            return t;
+        }
+    }
+    return -1.0;
+}
+
+// The occlusion of one volume: x, by occluders within the near field's reach that the ND-buffer
+// does not hold; y, by the rest.
+fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> vec2<f32> {
+    let reach = select(settings.far_radius, volume.d_max, volume.d_max > 0.0);
     let g = to_grid(volume, p);
     let size = vec3<f32>(f32(volume.resolution));
-    if any(g < -volume.reach) || any(g > size + volume.reach) {
-        return 0.0;
+    let margin = (reach + volume.bias) / volume.cell;
+    if any(g < -margin) || any(g > size + margin) {
+        return vec2<f32>(0.0);
     }
     let h = cell_hash(p, volume.noise_cell);
     let j1 = unit_float(pcg_hash(h));
@@ -43,22 +125,40 @@ fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let j3 = unit_float(pcg_hash(h + 2u));
     let frame = tangent_frame(n);
     let origin = p + n * volume.bias;
-    var occlusion = 0.0;
+    var occlusion = vec2<f32>(0.0);
     var cosines = 0.0;
+    // Cosines of the rays blocked within the near field's reach, held or not.
+    var near_blocked = 0.0;
     for (var i = 0u; i < volume.rays; i++) {
         let local = ray_direction(i, volume.rays, volume.cos_spread, j1, j2);
         let direction = frame * local;
         cosines += local.z;
-        for (var s = 0u; s < volume.steps; s++) {
-            let t = volume.d_max * (f32(s) + j3) / f32(volume.steps);
-            if occupied(volume, origin + direction * t) {
-                let weight = select(wendland(t, volume.d_max), 1.0, (volume.flags & 2u) != 0u);
-                occlusion += weight * local.z;
-                break;
-            }
+        var t: f32;
+        if volume.steps == 0u {
+            t = first_hit_cells(volume, origin, direction, reach);
+        } else {
+            t = first_hit_steps(volume, origin, direction, reach, j3);
+        }
+        if t < 0.0 {
+            continue;
+        }
+        let weight = select(wendland(t, reach), 1.0, (volume.flags & 2u) != 0u) * local.z;
+        if t < settings.far_near_radius {
+            // The near field counts this occluder if the ND-buffer holds it.
+            occlusion.x += weight * (1.0 - nd_buffer_holds(view, depth_texture,
+                back_depth_texture, settings.seen_back_layer != 0u, origin + direction * t,
+                volume.bias));
+            near_blocked += local.z;
+        } else {
+            occlusion.y += weight;
         }
     }
-    return select(0.0, occlusion / cosines, cosines > 0.0);
+    // The far part as a share of the rays the near part leaves open, so that the two join as
+    // 1 − (1 − x)(1 − y).
+    return vec2<f32>(
+        select(0.0, occlusion.x / cosines, cosines > 0.0),
+        select(0.0, occlusion.y / (cosines - near_blocked), cosines - near_blocked > 0.0),
+    );
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -71,7 +171,7 @@ fn voxel_ao(@builtin(global_invocation_id) id: vec3<u32>) {
     // Low-resolution texel l stands for full-resolution pixel 2l, as the upsampling expects.
     let x = min(vec2<i32>(id.xy) * 2, dims - 1);
     let depth = textureLoad(depth_texture, x, 0);
-    var occlusion = 0.0;
+    var occlusion = vec2<f32>(0.0);
     if depth > 0.0 {
         let p = world_position(view, x, vec2<f32>(dims), depth);
         let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
@@ -82,5 +182,5 @@ fn voxel_ao(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(output, vec2<i32>(id.xy), vec4<f32>(occlusion));
+    textureStore(output, vec2<i32>(id.xy), vec4<f32>(occlusion, 0.0, 0.0));
 }

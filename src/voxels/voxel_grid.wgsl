@@ -14,17 +14,18 @@ struct VoxelVolume {
     // Cells per axis; 0 marks an unused slot.
     resolution: u32,
     rays: u32,
+    // Evenly spaced tests per ray (the paper's march); 0: every cell the ray crosses.
     steps: u32,
     // cos of the half-angle of the cone the rays fill.
     cos_spread: f32,
-    // Metres.
+    // Metres; 0: the camera's radius.
     d_max: f32,
     // Start offset of the rays along the normal, metres.
     bias: f32,
     // World-space size of the cells the jitter is constant over, metres.
     noise_cell: f32,
-    // d_max + bias in cells per grid axis.
-    reach: vec3<f32>,
+    // World-space size of one cell along each grid axis, metres.
+    cell: vec3<f32>,
     // Bit 0: the occupied voxels are drawn; bit 1: hits count without falloff.
     flags: u32,
 }
@@ -47,6 +48,15 @@ fn to_grid(volume: VoxelVolume, p: vec3<f32>) -> vec3<f32> {
         dot(volume.grid_from_world[0], h),
         dot(volume.grid_from_world[1], h),
         dot(volume.grid_from_world[2], h),
+    );
+}
+
+// A world-space direction in grid units (the linear part of the map).
+fn to_grid_direction(volume: VoxelVolume, d: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        dot(volume.grid_from_world[0].xyz, d),
+        dot(volume.grid_from_world[1].xyz, d),
+        dot(volume.grid_from_world[2].xyz, d),
     );
 }
 

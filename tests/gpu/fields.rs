@@ -7,13 +7,12 @@ use bevy::asset::LoadState;
 use bevy::math::Affine3A;
 use bevy::prelude::*;
 use bevy_dynamic_ao::FieldShading;
-use bevy_dynamic_ao::fields::t_clip::t_clip_table;
 use bevy_dynamic_ao::fields::{AoFieldCache, AoFieldData, BakeSettings, bake};
 use bevy_dynamic_ao::prelude::*;
-use bevy_dynamic_ao::reference::{fields::field_occlusion, metrics::rmse, scene::TriangleScene};
+use bevy_dynamic_ao::reference::{fields::field_occlusion, scene::TriangleScene};
 
 use crate::examples::example_binary;
-use crate::harness::{GPU_TURN, Gpu, WIDTH, band, difference_stats};
+use crate::harness::{GPU_TURN, Gpu, difference_stats};
 use crate::scenes;
 
 fn small_field() -> AoFieldData {
@@ -138,7 +137,10 @@ fn ao_bake_writes_a_loadable_field_per_mesh() {
     for entry in std::fs::read_dir(&out).unwrap() {
         let bytes = std::fs::read(entry.unwrap().path()).unwrap();
         let field = AoFieldData::from_bytes(&bytes).expect("a valid field");
-        assert_eq!(field.resolution, UVec3::splat(8));
+        // About cubic cells, within a budget of 8³.
+        let r = field.resolution;
+        assert!(r.max_element() <= 16 && r.x * r.y * r.z <= 600, "{r}");
+        assert_eq!((field.reach, field.near_reach), (0.75, 0.75));
         assert!(
             field.cells.iter().any(|c| c[0] > 0.1),
             "the field holds occlusion"
@@ -222,9 +224,9 @@ fn gpu_fields_match_the_cpu_evaluation() {
         let mut gpu = gpu_with_fields(&scene, fields_only(shading));
         let frame = gpu.frame(4);
         let placed = occluders(&mut gpu);
-        let table = t_clip_table();
         let refs: Vec<(&AoFieldData, Affine3A)> = placed.iter().map(|(f, t)| (f, *t)).collect();
-        let cpu: Vec<f32> = field_occlusion(&frame.nd, &frame.view, &refs, shading, &table)
+        // The field alone counts every occluder within the camera's radius.
+        let cpu: Vec<f32> = field_occlusion(&frame.nd, &frame.view, &refs, shading, 0.0, false)
             .into_iter()
             .map(|o| 1.0 - o)
             .collect();
@@ -249,56 +251,6 @@ fn gpu_fields_match_the_cpu_evaluation() {
         assert!(mean < 0.002 && p99 < 0.01, "{mean} {p99}");
         assert!(off * 500 < mask.len(), "{off} pixels differ");
     }
-}
-
-/// A box just outside the view of a camera looking down at the floor: its field darkens the
-/// floor beside it as ground truth does, where the near field and Bevy's SSAO see nothing.
-#[test]
-fn an_off_screen_box_darkens_the_floor_through_its_field() {
-    let mut scene = scenes::box_beside_view();
-    scene.fields.push((1, quick_field()));
-    let mut gpu = gpu_with_fields(&scene, DynamicAo::default());
-    gpu.set_ao(|ao| ao.fields = false);
-    let near_only = gpu.frame(4);
-    assert!(
-        !near_only
-            .nd
-            .front
-            .iter()
-            .any(|t| t.depth > 0.0 && t.normal.y < 0.99),
-        "the box must be outside the view"
-    );
-    gpu.set_ao(|ao| ao.fields = true);
-    let with_fields = gpu.frame(4);
-    gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
-    let bevy = gpu.frame(4);
-    let truth = with_fields.ground_truth(&scene.bvh(), 5.0);
-    let mask = with_fields.geometry_mask();
-    let error = |v: &[f32]| rmse(v, &truth, Some(&mask));
-    let strip = |v: &[f32]| band(v, WIDTH * 9 / 10..WIDTH) - band(v, 0..WIDTH / 10);
-    println!(
-        "off-screen box, occlusion it adds to the nearest strip: truth {:.3}, near+fields {:.3}, \
-         near only {:.3}, Bevy SSAO {:.3}; RMSE vs truth (R = 5 m): near+fields {:.4}, near \
-         only {:.4}, Bevy SSAO {:.4}",
-        strip(&truth),
-        strip(&with_fields.visibility),
-        strip(&near_only.visibility),
-        strip(&bevy.visibility),
-        error(&with_fields.visibility),
-        error(&near_only.visibility),
-        error(&bevy.visibility),
-    );
-    assert!(strip(&truth) > 0.05);
-    assert!(strip(&bevy.visibility).abs() < 0.02);
-    assert!(strip(&near_only.visibility).abs() < 0.02);
-    // The border rescale of §3.4.1 (on by default, as published) lowers every value up to 0.3
-    // by the largest boundary value, about ε = 0.1 here, so the field finds less than ground
-    // truth; without the rescale this strip reads 0.218 against 0.205.
-    assert!(
-        strip(&with_fields.visibility) > 0.3 * strip(&truth),
-        "the field should find the box's occlusion"
-    );
-    assert!(error(&with_fields.visibility) < error(&near_only.visibility));
 }
 
 /// Baking on load goes through the disk cache: the first run writes the field there, a corrupt

@@ -6,6 +6,8 @@
 mod character;
 #[path = "../../examples/common/mod.rs"]
 mod common;
+#[path = "../../examples/common/far_terms.rs"]
+mod far_terms;
 #[path = "../../examples/common/gltf_scene.rs"]
 mod gltf_scene;
 #[path = "../../examples/common/toasters.rs"]
@@ -16,11 +18,14 @@ mod back_layer;
 mod bad_input;
 mod cameras;
 mod examples;
+mod far_field;
+mod far_scenes;
 mod fields;
 mod half_resolution;
 mod harness;
 mod horizon;
 mod lighting;
+mod models;
 mod near_field;
 mod ray_march;
 mod scenes;

@@ -68,6 +68,17 @@ pub fn box_beside_view() -> SceneSpec {
         )
 }
 
+/// The same view with a thin wall (4 m long, 1.2 m high, 10 cm thick) standing just outside the
+/// right edge of the view: a large, thin occluder.
+pub fn wall_beside_view() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(0.1, 1.2, 4.0),
+            Transform::from_xyz(1.5, 0.6, 0.0),
+        )
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [

@@ -188,87 +188,107 @@ fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
     }
 }
 
-/// Spheres refit every frame follow the skin: bending the elbow further turns the spheres of the
+/// Proxies refit every frame follow the skin: bending the elbow further turns the proxies of the
 /// upper half about the elbow by the same angle, as a CPU skinning of those vertices does, and
-/// leaves the lower half where it was.
+/// leaves the lower half where it was. The paper's spheres (eight Lloyd clusters) and the default
+/// boxes (one per bone of this column, turned with it).
 #[test]
 fn occluder_spheres_follow_the_skin() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
-    let world = gpu.app.world_mut();
-    let bindposes = column_bindposes(world);
-    let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
-    let root = world.spawn(Transform::IDENTITY).id();
-    let elbow = world
-        .spawn((
-            Transform::from_xyz(0.0, LENGTH / 2.0, 0.0).with_rotation(Quat::from_rotation_z(-0.3)),
-            ChildOf(root),
-        ))
-        .id();
-    let column = world
-        .spawn((
-            Mesh3d(mesh),
-            SkinnedMesh {
-                inverse_bindposes: bindposes,
-                joints: vec![root, elbow],
-            },
-            SphereOccluder {
-                count: 8,
-                ..default()
-            },
-            Transform::IDENTITY,
-        ))
-        .id();
-    gpu.update(2);
-    let spheres = |gpu: &mut Gpu| {
-        gpu.app
-            .world()
-            .get::<OccluderSpheres>(column)
-            .expect("the plugin adds OccluderSpheres")
-            .spheres
-            .clone()
-    };
-    let before = spheres(&mut gpu);
-    gpu.app
-        .world_mut()
-        .get_mut::<Transform>(elbow)
-        .unwrap()
-        .rotation = Quat::from_rotation_z(-1.0);
-    gpu.update(1);
-    let after = spheres(&mut gpu);
-    assert_eq!(before.len(), 8);
-    assert_eq!(after.len(), 8);
-
-    let knee = Vec3::Y * (LENGTH / 2.0);
-    let turn = Quat::from_rotation_z(-0.7);
-    let (mut upper, mut lower) = (0, 0);
-    for (b, a) in before.iter().zip(&after) {
-        // Which bone a sphere belongs to, from where it sat before the bend; a cluster is about
-        // 0.2 m long, so those near the elbow may hold vertices of both and are left out.
-        let on_upper_bone = (Quat::from_rotation_z(0.3) * (b.center - knee)).y > 0.15;
-        let expected = if on_upper_bone {
-            upper += 1;
-            knee + turn * (b.center - knee)
-        } else if b.center.y < LENGTH / 2.0 - 0.15 {
-            lower += 1;
-            b.center
-        } else {
-            continue;
+    for (shape, count) in [(ProxyShape::Spheres, 8), (ProxyShape::Boxes, 2)] {
+        let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+        let world = gpu.app.world_mut();
+        let bindposes = column_bindposes(world);
+        let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
+        let root = world.spawn(Transform::IDENTITY).id();
+        let elbow = world
+            .spawn((
+                Transform::from_xyz(0.0, LENGTH / 2.0, 0.0)
+                    .with_rotation(Quat::from_rotation_z(-0.3)),
+                ChildOf(root),
+            ))
+            .id();
+        let column = world
+            .spawn((
+                Mesh3d(mesh),
+                SkinnedMesh {
+                    inverse_bindposes: bindposes,
+                    joints: vec![root, elbow],
+                },
+                SphereOccluder {
+                    count: 8,
+                    shape,
+                    ..default()
+                },
+                Transform::IDENTITY,
+            ))
+            .id();
+        gpu.update(2);
+        let proxies = |gpu: &mut Gpu| {
+            gpu.app
+                .world()
+                .get::<OccluderSpheres>(column)
+                .expect("the plugin adds OccluderSpheres")
+                .spheres
+                .clone()
         };
+        let before = proxies(&mut gpu);
+        gpu.app
+            .world_mut()
+            .get_mut::<Transform>(elbow)
+            .unwrap()
+            .rotation = Quat::from_rotation_z(-1.0);
+        gpu.update(1);
+        let after = proxies(&mut gpu);
+        assert_eq!(before.len(), count, "{shape:?}");
+        assert_eq!(after.len(), count, "{shape:?}");
+
+        let knee = Vec3::Y * (LENGTH / 2.0);
+        let turn = Quat::from_rotation_z(-0.7);
+        let (mut upper, mut lower) = (0, 0);
+        for (b, a) in before.iter().zip(&after) {
+            // Which bone a proxy belongs to, from where it sat before the bend; a sphere's
+            // cluster is about 0.2 m long, so those near the elbow may hold vertices of both and
+            // are left out.
+            let on_upper_bone = (Quat::from_rotation_z(0.3) * (b.center - knee)).y > 0.15;
+            let (expected, axes) = if on_upper_bone {
+                upper += 1;
+                (
+                    knee + turn * (b.center - knee),
+                    Mat3::from_quat(turn) * b.axes,
+                )
+            } else if b.center.y < LENGTH / 2.0 - 0.15 {
+                lower += 1;
+                (b.center, b.axes)
+            } else {
+                continue;
+            };
+            assert!(
+                a.center.distance(expected) < 1e-3,
+                "{shape:?}: proxy at {} moved to {}, expected {expected}",
+                b.center,
+                a.center
+            );
+            assert!(
+                (a.radius - b.radius).abs() < 1e-4,
+                "{shape:?}: rigid parts keep their size"
+            );
+            if shape == ProxyShape::Boxes {
+                assert!(
+                    (a.axes - axes)
+                        .abs()
+                        .to_cols_array()
+                        .iter()
+                        .all(|d| *d < 1e-3),
+                    "a box turns with its bone"
+                );
+            }
+        }
+        let least = if shape == ProxyShape::Boxes { 1 } else { 2 };
         assert!(
-            a.center.distance(expected) < 1e-3,
-            "sphere at {} moved to {}, expected {expected}",
-            b.center,
-            a.center
-        );
-        assert!(
-            (a.radius - b.radius).abs() < 1e-4,
-            "rigid parts keep their size"
+            upper >= least && lower >= least,
+            "{shape:?}: {upper} upper, {lower} lower proxies"
         );
     }
-    assert!(
-        upper >= 2 && lower >= 2,
-        "{upper} upper, {lower} lower spheres"
-    );
 }
 
 /// A `SkinnedMesh` on a mesh without joint attributes, and a skin with a NaN joint: a warning
@@ -294,8 +314,10 @@ fn bad_skins_fall_back() {
     let mut broken = Transform::from_xyz(0.0, LENGTH / 2.0, 0.0);
     broken.translation.y = f32::NAN;
     let elbow = world.spawn((broken, ChildOf(root))).id();
+    // The paper's spheres: six clusters of the column, some of them on the broken joint.
     let occluder = SphereOccluder {
         count: 6,
+        shape: ProxyShape::Spheres,
         ..default()
     };
     let without_skin_data = world

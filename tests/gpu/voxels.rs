@@ -13,12 +13,12 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::storage::ShaderBuffer;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
-    filter::{cross_bilateral_blur, joint_bilateral_upsample},
+    filter::{cross_bilateral_blur, joint_bilateral_upsample_pair},
     metrics::rmse,
     scene::{Triangle, TriangleScene},
-    voxels::{VoxelGrid, is_closed, voxel_ao_map, voxelize},
+    voxels::{VoxelCamera, VoxelGrid, is_closed, voxel_ao_map, voxelize},
 };
-use bevy_dynamic_ao::voxels::{VoxelFalloff, VoxelGridInfo, VoxelGridReadback};
+use bevy_dynamic_ao::voxels::{VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelMarch};
 
 use crate::harness::{Frame, Gpu, SceneSpec, WIDTH, band, difference_stats};
 use crate::scenes;
@@ -324,13 +324,19 @@ fn cpu_voxel_visibility(
         .iter()
         .map(|(info, grid)| (grid.clone(), info.rays))
         .collect();
-    let low = voxel_ao_map(&frame.nd, &frame.view, &volumes);
-    let full = joint_bilateral_upsample(&low, &frame.nd, &frame.view, ao.effective_radius());
+    // The voxels alone count every hit within the camera's radius: all in the second channel.
+    let camera = VoxelCamera {
+        radius: ao.effective_radius(),
+        count_once: None,
+    };
+    let low = voxel_ao_map(&frame.nd, &frame.view, &volumes, &camera);
+    let full = joint_bilateral_upsample_pair(&low, &frame.nd, &frame.view, ao.effective_radius());
+    let rest: Vec<f32> = full.iter().map(|[_, rest]| *rest).collect();
     let blur = ao.blur.sanitized();
     let filtered = if blur.radius > 0 {
-        cross_bilateral_blur(&full, &frame.nd, &frame.view, blur.radius, blur.sharpness)
+        cross_bilateral_blur(&rest, &frame.nd, &frame.view, blur.radius, blur.sharpness)
     } else {
-        full
+        rest
     };
     filtered.iter().map(|o| 1.0 - o.clamp(0.0, 1.0)).collect()
 }
@@ -354,7 +360,7 @@ fn gpu_voxel_ao_matches_the_cpu_evaluation_of_the_same_rays() {
                 half_extents: Vec3::new(2.0, 1.3, 2.0),
                 resolution: 96,
                 rays: 16,
-                d_max: 1.5,
+                d_max: Some(1.5),
                 ..default()
             },
         );
@@ -370,7 +376,9 @@ fn gpu_voxel_ao_matches_the_cpu_evaluation_of_the_same_rays() {
              percentile {p99:.5}"
         );
         assert!(darkest < 0.7, "the corner should be occluded");
-        assert!(mean < 0.003 && p99 < 0.03, "{mean} {p99}");
+        // A ray that grazes a cell boundary can take the other cell on one side: one ray of 16
+        // is about 0.06 of a texel.
+        assert!(mean < 0.003 && p99 < 0.07, "{mean} {p99}");
     }
 }
 
@@ -382,11 +390,13 @@ struct Measured {
     rmse: f32,
 }
 
-/// Ground truth, near field + voxels (both falloffs), near field alone and Bevy's SSAO.
+/// Ground truth, near field + voxels (the defaults, and the paper's Wendland falloff and
+/// 8-step march), near field alone and Bevy's SSAO.
 struct Comparison {
     truth: Measured,
+    voxels: Measured,
     wendland: Measured,
-    unweighted: Measured,
+    steps: Measured,
     near: Measured,
     bevy: Measured,
 }
@@ -404,50 +414,64 @@ fn against_truth(
     gpu.set_ao(|ao| ao.voxels = false);
     let near = gpu.frame(3);
     gpu.set_ao(|ao| ao.voxels = true);
-    let wendland = gpu.frame(3);
-    gpu.app
-        .world_mut()
-        .get_mut::<VoxelAoVolume>(entity)
-        .unwrap()
-        .falloff = VoxelFalloff::None;
-    let unweighted = gpu.frame(3);
+    let voxels = gpu.frame(3);
+    let set = |gpu: &mut Gpu, change: fn(&mut VoxelAoVolume)| {
+        change(
+            &mut gpu
+                .app
+                .world_mut()
+                .get_mut::<VoxelAoVolume>(entity)
+                .unwrap(),
+        );
+        gpu.frame(3)
+    };
+    let wendland = set(&mut gpu, |v| v.falloff = VoxelFalloff::Wendland);
+    let steps = set(&mut gpu, |v| {
+        v.falloff = VoxelFalloff::None;
+        v.march = VoxelMarch::Steps(VoxelAoVolume::PAPER_STEPS);
+    });
     gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
     let bevy = gpu.frame(3);
-    let truth = wendland.ground_truth(&scene.bvh(), radius);
-    let mask = wendland.geometry_mask();
+    let truth = voxels.ground_truth(&scene.bvh(), radius);
+    let mask = voxels.geometry_mask();
     let measure = |v: &[f32]| Measured {
         strip: band(v, strip.clone()) - band(v, other.clone()),
         rmse: rmse(v, &truth, Some(&mask)),
     };
     Comparison {
         truth: measure(&truth),
+        voxels: measure(&voxels.visibility),
         wendland: measure(&wendland.visibility),
-        unweighted: measure(&unweighted.visibility),
+        steps: measure(&steps.visibility),
         near: measure(&near.visibility),
         bevy: measure(&bevy.visibility),
     }
 }
 
 impl Comparison {
-    fn report(&self, what: &str) {
+    /// Prints the comparison and checks the defaults find the truth's occlusion within `bound`.
+    fn report(&self, what: &str, bound: f32) {
         let Self {
             truth,
+            voxels,
             wendland,
-            unweighted,
+            steps,
             near,
             bevy,
         } = self;
         println!(
-            "{what}: occlusion added to the strip: truth {:.3}, near+voxels {:.3} (no falloff \
-             {:.3}), near only {:.3}, Bevy SSAO {:.3}; RMSE vs truth: near+voxels {:.4} (no \
-             falloff {:.4}), near only {:.4}, Bevy SSAO {:.4}",
+            "{what}: occlusion added to the strip: truth {:.3}, near+voxels {:.3} (Wendland \
+             {:.3}, 8 steps {:.3}), near only {:.3}, Bevy SSAO {:.3}; RMSE vs truth: near+voxels \
+             {:.4} (Wendland {:.4}, 8 steps {:.4}), near only {:.4}, Bevy SSAO {:.4}",
             truth.strip,
+            voxels.strip,
             wendland.strip,
-            unweighted.strip,
+            steps.strip,
             near.strip,
             bevy.strip,
+            voxels.rmse,
             wendland.rmse,
-            unweighted.rmse,
+            steps.rmse,
             near.rmse,
             bevy.rmse
         );
@@ -455,23 +479,18 @@ impl Comparison {
             truth.strip > 0.05,
             "{what}: the scene should have something to find"
         );
-        for (falloff, voxels) in [("Wendland", wendland), ("no falloff", unweighted)] {
-            assert!(
-                voxels.rmse < near.rmse && voxels.rmse < bevy.rmse,
-                "{what}, {falloff}: voxels should bring the image closer to the truth"
-            );
-            assert!(
-                (voxels.strip - truth.strip).abs() < (near.strip - truth.strip).abs(),
-                "{what}, {falloff}: voxels should find occlusion the near field misses"
-            );
-        }
-        // Without falloff the estimator targets the truth's own definition.
         assert!(
-            (unweighted.strip - truth.strip).abs() < 0.35 * truth.strip,
-            "{what}: no-falloff voxels {} vs truth {}",
-            unweighted.strip,
+            (voxels.strip - truth.strip).abs() < bound,
+            "{what}: voxels {} vs truth {}",
+            voxels.strip,
             truth.strip
         );
+        assert!(
+            voxels.rmse < near.rmse && voxels.rmse < bevy.rmse,
+            "{what}: voxels should bring the image closer to the truth"
+        );
+        // The paper's falloff weights hits down: it finds less than ground truth counts.
+        assert!(wendland.strip < voxels.strip - 0.02, "{what}: Wendland");
     }
 }
 
@@ -485,14 +504,13 @@ fn an_off_screen_occluder_darkens_the_floor_like_ground_truth() {
         VoxelAoVolume {
             half_extents: Vec3::new(2.5, 1.0, 2.5),
             resolution: 128,
-            d_max: 2.0,
             ..default()
         },
         WIDTH * 9 / 10..WIDTH,
         0..WIDTH / 10,
         2.0,
     );
-    comparison.report("off-screen box");
+    comparison.report("off-screen box", 0.02);
     let Comparison { near, bevy, .. } = comparison;
     assert!(
         near.strip.abs() < 0.02 && bevy.strip.abs() < 0.02,
@@ -523,14 +541,13 @@ fn a_hidden_occluder_darkens_the_floor_like_ground_truth() {
         VoxelAoVolume {
             half_extents: Vec3::new(2.2, 1.0, 2.2),
             resolution: 128,
-            d_max: 1.0,
             ..default()
         },
         WIDTH * 44 / 100..WIDTH * 56 / 100,
         WIDTH * 9 / 10..WIDTH,
         1.0,
     );
-    comparison.report("wall hidden under a plate");
+    comparison.report("wall hidden under a plate", 0.03);
 }
 
 /// A slow orbit around a static scene: the jitter is tied to world positions, so frame-to-frame
@@ -614,17 +631,17 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
         VoxelAoVolume {
             resolution: 0,
             rays: 0,
-            steps: 0,
+            march: VoxelMarch::Steps(0),
             spread: -1.0,
-            d_max: f32::NAN,
+            d_max: Some(f32::NAN),
             ..default()
         },
         VoxelAoVolume {
             resolution: 100_000,
             rays: 100_000,
-            steps: 100_000,
+            march: VoxelMarch::Steps(100_000),
             spread: 7.0,
-            d_max: -3.0,
+            d_max: Some(-3.0),
             ..VoxelAoVolume::new(Vec3::new(2.5, 1.0, 2.5))
         },
     ];
@@ -692,8 +709,12 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
     );
     let rays = world.get::<VoxelGridInfo>(clamped[1]).unwrap().rays;
     assert_eq!(
-        (rays.rays, rays.steps),
-        (VoxelAoVolume::MAX_RAYS, VoxelAoVolume::MAX_STEPS)
+        (rays.rays, rays.march, rays.d_max),
+        (
+            VoxelAoVolume::MAX_RAYS,
+            VoxelMarch::Steps(VoxelAoVolume::MAX_STEPS),
+            None
+        )
     );
     assert!(frame.visibility.iter().all(|v| v.is_finite()));
     let mask = frame.geometry_mask();

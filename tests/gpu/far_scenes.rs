@@ -1,0 +1,328 @@
+//! Scenes for judging the far field the way a user would set it up: every mesh an occluder of
+//! every kind (as `ao_capture`'s far-field techniques attach them), thin and large occluders,
+//! occluders just outside the view, characters standing on a floor. Shared by the `far_field`
+//! tests and benchmark.
+#![allow(dead_code)]
+
+use bevy::prelude::*;
+use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::{
+    bvh::Bvh,
+    posed::{posed_triangles, posed_triangles_of},
+    scene::TriangleScene,
+    spheres::{proxy_occlusion, sphere_union},
+};
+use bevy_dynamic_ao::spheres::OccluderSphere;
+
+use crate::far_terms::{self, FarTerm};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
+use crate::{models, scenes};
+
+/// A model file to stand on the floor: file (relative to the asset folder), animation, time
+/// (seconds), height (metres) and where it stands (x, z).
+#[derive(Clone, Copy)]
+pub struct Model {
+    pub file: &'static str,
+    pub animation: Option<usize>,
+    pub time: f32,
+    pub height: f32,
+    pub at: Vec2,
+}
+
+/// One scene of the comparison.
+pub struct FarScene {
+    pub name: &'static str,
+    pub spec: SceneSpec,
+    pub model: Option<Model>,
+    /// Camera placement from the model's bounds, when the scene has a model.
+    pub camera: Option<fn(Vec3, Vec3) -> Transform>,
+    /// Image columns of the floor strip beside an occluder outside the view.
+    pub strip: Option<std::ops::Range<u32>>,
+}
+
+fn floor() -> Mesh {
+    Plane3d::default().mesh().size(20.0, 20.0).build()
+}
+
+pub fn plain(name: &'static str, spec: SceneSpec) -> FarScene {
+    FarScene {
+        name,
+        spec,
+        model: None,
+        camera: None,
+        strip: None,
+    }
+}
+
+/// A model standing on a 20 m floor, seen from the front and a little above.
+pub fn model_on_floor(name: &'static str, model: Model) -> FarScene {
+    FarScene {
+        name,
+        spec: SceneSpec::new(Transform::default()).with(floor(), Transform::IDENTITY),
+        model: Some(model),
+        camera: Some(|lo, hi| {
+            let centre = (lo + hi) / 2.0;
+            let size = (hi - lo).max_element();
+            Transform::from_translation(centre + Vec3::new(0.9, 0.55, 1.4) * size * 1.3)
+                .looking_at(centre - Vec3::Y * 0.15 * size, Vec3::Y)
+        }),
+        strip: None,
+    }
+}
+
+/// The strip of floor beside an occluder just right of the view: the last 12 columns.
+pub const STRIP: std::ops::Range<u32> = WIDTH - 12..WIDTH;
+
+/// The scenes of `tests/gpu/scenes.rs`: objects in view, and a box and a wall just outside it.
+pub fn procedural() -> Vec<FarScene> {
+    vec![
+        plain("cube on plane", scenes::cube_on_plane()),
+        plain("room corner", scenes::room_corner()),
+        plain("ball near wall", scenes::ball_near_wall()),
+        FarScene {
+            strip: Some(STRIP),
+            ..plain("box beside view", scenes::box_beside_view())
+        },
+        FarScene {
+            strip: Some(STRIP),
+            ..plain("wall beside view", scenes::wall_beside_view())
+        },
+    ]
+}
+
+/// The project's own skinned walker (`assets/characters/walker.glb`), mid-stride on a floor.
+pub fn walker_on_floor() -> FarScene {
+    model_on_floor(
+        "walker on floor",
+        Model {
+            file: "characters/walker.glb",
+            animation: Some(0),
+            time: 0.3,
+            height: 1.8,
+            at: Vec2::ZERO,
+        },
+    )
+}
+
+/// Third-party models from `../shared/assets` on a floor (skinned, static and detailed, morphed),
+/// and a character just outside the view.
+pub fn third_party() -> Vec<FarScene> {
+    let model = |file, animation, time, height| Model {
+        file,
+        animation,
+        time,
+        height,
+        at: Vec2::ZERO,
+    };
+    vec![
+        model_on_floor(
+            "CesiumMan on floor",
+            model("CesiumMan/CesiumMan.glb", Some(0), 0.6, 1.8),
+        ),
+        model_on_floor("Fox on floor", model("Fox/Fox.glb", Some(2), 0.5, 0.8)),
+        model_on_floor(
+            "DamagedHelmet on floor",
+            model("DamagedHelmet/DamagedHelmet.glb", None, 0.0, 0.6),
+        ),
+        model_on_floor(
+            "AnimatedMorphCube on floor",
+            model("AnimatedMorphCube/AnimatedMorphCube.glb", Some(0), 0.7, 0.5),
+        ),
+        FarScene {
+            model: Some(Model {
+                at: Vec2::new(1.9, 0.0),
+                ..model("CesiumMan/CesiumMan.glb", Some(0), 0.6, 1.8)
+            }),
+            camera: Some(|_, _| {
+                Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z)
+            }),
+            strip: Some(STRIP),
+            ..plain(
+                "CesiumMan beside view",
+                SceneSpec::new(Transform::default()).with(floor(), Transform::IDENTITY),
+            )
+        },
+    ]
+}
+
+/// A scene in a headless app, every mesh a sphere occluder and an AO field, ready to render
+/// any configuration at any radius.
+pub struct FarRun {
+    pub gpu: Gpu,
+    /// Every mesh entity.
+    pub meshes: Vec<Entity>,
+    /// The scene's bounds (the floor cut to 40 m).
+    pub bounds: (Vec3, Vec3),
+    /// The voxel volume for the radius it was placed for.
+    volume: Option<(Entity, f32)>,
+}
+
+impl FarRun {
+    /// Builds the app (loading models from `folder`, or the crate's `assets/`).
+    pub fn new(scene: &FarScene, folder: Option<&str>) -> Self {
+        let mut gpu = Gpu::with_asset_folder(&scene.spec, DynamicAo::default(), folder);
+        if let Some(model) = scene.model {
+            let root = models::load_model(&mut gpu, model.file, model.animation, model.time);
+            let (lo, hi) = models::stand_on_floor(&mut gpu, root, model.height, model.at);
+            if let Some(camera) = scene.camera {
+                let entity = gpu.camera;
+                gpu.app
+                    .world_mut()
+                    .entity_mut(entity)
+                    .insert(camera(lo, hi));
+            }
+        }
+        // Transforms and visibility propagate on the first frame.
+        gpu.update(1);
+        let world = gpu.app.world_mut();
+        let meshes: Vec<Entity> = world
+            .query_filtered::<Entity, With<Mesh3d>>()
+            .iter(world)
+            .collect();
+        let (lo, hi) = posed_triangles(world).bounds();
+        let bounds = (lo.max(Vec3::splat(-20.0)), hi.min(Vec3::splat(20.0)));
+        let mut commands = world.commands();
+        FarTerm::Spheres.attach(&mut commands, &meshes, bounds, 0.0);
+        FarTerm::Fields.attach(&mut commands, &meshes, bounds, 0.0);
+        world.flush();
+        let mut run = Self {
+            gpu,
+            meshes,
+            bounds,
+            volume: None,
+        };
+        run.settle();
+        run
+    }
+
+    /// Frames until every AO field is baked for the current radius and every mesh fitted.
+    pub fn settle(&mut self) {
+        for _ in 0..3000 {
+            self.gpu.update(1);
+            let world = self.gpu.app.world_mut();
+            let baking = world
+                .query_filtered::<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>()
+                .iter(world)
+                .any(|(active, pending)| !active || pending);
+            let fitting = world
+                .query::<&OccluderSpheres>()
+                .iter(world)
+                .any(|s| s.spheres.is_empty());
+            if !baking && !fitting {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        panic!("fields or proxies were not ready in 3000 frames");
+    }
+
+    /// One volume over the part of the scene the view needs at `radius`, as `ao_capture` places
+    /// it: the scene's bounds cut to the visible surfaces grown by the radius.
+    fn place_volume(&mut self, radius: f32) {
+        if self.volume.is_some_and(|(_, r)| r == radius) {
+            return;
+        }
+        if let Some((volume, _)) = self.volume.take() {
+            self.gpu.app.world_mut().despawn(volume);
+        }
+        self.gpu.set_ao(|ao| FarTerm::select(None, ao));
+        let seen = self.gpu.frame(2);
+        let region = far_terms::voxel_region(
+            self.bounds,
+            far_terms::visible_bounds(&seen.nd.front, WIDTH, HEIGHT, &seen.view),
+            radius,
+        );
+        let world = self.gpu.app.world_mut();
+        let mut commands = world.commands();
+        let volume = FarTerm::Voxels
+            .attach(&mut commands, &self.meshes, region, radius)
+            .expect("a volume");
+        world.flush();
+        self.volume = Some((volume, radius));
+    }
+
+    /// Renders the near field (or no image-space term) with `far` joined by `blend`, every
+    /// term counting within `radius`.
+    pub fn render(
+        &mut self,
+        near: bool,
+        far: Option<FarTerm>,
+        blend: FarFieldBlend,
+        radius: f32,
+    ) -> Frame {
+        if far == Some(FarTerm::Voxels) {
+            self.place_volume(radius);
+        }
+        self.gpu.set_ao(|ao| {
+            ao.technique = if near {
+                AoTechnique::NearField
+            } else {
+                AoTechnique::Off
+            };
+            ao.radius = radius;
+            ao.far_field_blend = blend;
+            FarTerm::select(far, ao);
+        });
+        self.settle();
+        self.gpu.frame(4)
+    }
+
+    /// The scene's triangles as they are drawn now.
+    pub fn bvh(&mut self) -> Bvh {
+        Bvh::new(posed_triangles(self.gpu.app.world_mut()).triangles)
+    }
+}
+
+/// Mean occlusion of `visibility` over the image columns `columns`.
+pub fn strip_occlusion(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
+    crate::harness::band(visibility, columns)
+}
+
+/// The proxies of every mesh but the floor (whose proxy is larger than 5 m) as they are now, and
+/// those meshes' triangles as they are drawn.
+pub fn model_proxies(world: &mut World) -> (Vec<OccluderSphere>, TriangleScene) {
+    let occluders: Vec<(Entity, OccluderSpheres)> = world
+        .query::<(Entity, &OccluderSpheres)>()
+        .iter(world)
+        .map(|(e, o)| (e, o.clone()))
+        .filter(|(_, o)| o.spheres.iter().all(|p| p.radius < 5.0))
+        .collect();
+    let keep: Vec<Entity> = occluders.iter().map(|(e, _)| *e).collect();
+    let model = posed_triangles_of(world, |e| keep.contains(&e));
+    let proxies = occluders.into_iter().flat_map(|(_, o)| o.spheres).collect();
+    (proxies, model)
+}
+
+/// Floor points (1 mm up) on a 20 × 20 grid over the model's bounds grown by 0.5 m, less those
+/// under the model: the receivers its proxies are judged on.
+pub fn floor_points_around(model: &TriangleScene, bvh: &Bvh) -> Vec<Vec3> {
+    let (lo, hi) = model.bounds();
+    (0..400)
+        .map(|i| {
+            let (u, v) = ((i % 20) as f32 / 19.0, (i / 20) as f32 / 19.0);
+            Vec3::new(
+                lo.x - 0.5 + u * (hi.x - lo.x + 1.0),
+                1e-3,
+                lo.z - 0.5 + v * (hi.z - lo.z + 1.0),
+            )
+        })
+        .filter(|&p| !bvh.any_hit(p, Vec3::Y, 0.0, f32::INFINITY))
+        .collect()
+}
+
+/// The occlusion `proxies` cast within `reach` on a floor point facing up: the product of their
+/// visibilities, the largest single one, and their union as compose takes it.
+pub fn proxies_on_floor(proxies: &[OccluderSphere], p: Vec3, reach: f32) -> [f32; 3] {
+    let (mut open, mut largest) = (1.0, 0.0f32);
+    for q in proxies {
+        let o = proxy_occlusion(q, p, Vec3::Y, reach).clamp(0.0, 1.0);
+        open *= 1.0 - o;
+        largest = largest.max(o);
+    }
+    [
+        1.0 - open,
+        largest,
+        sphere_union([0.0, 1.0 - open], largest)[1],
+    ]
+}
