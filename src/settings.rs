@@ -9,7 +9,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 pub const DEFAULT_RADIUS: f32 = 0.75;
 /// Default reach of the image-space technique when far-field terms take part, metres: beyond it
 /// the far field counts every occluder (see [`DynamicAo::near_field_radius`]).
-pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.75;
+pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.5;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
 /// Default half-width of the cross-bilateral blur, pixels.
@@ -46,8 +46,10 @@ pub struct DynamicAo {
     /// near_field_radius)` that the ND-buffer shows, and the far-field terms count everything
     /// else within `radius`: occluders beyond this distance, and nearer ones the ND-buffer does
     /// not hold (off-screen, or hidden behind both of its layers). Image-space AO loses accuracy
-    /// at large radii (each of its samples then stands for a large patch); far-field proxies
-    /// do not. With no far-field occluder in the scene, or another blend, the image-space
+    /// with distance (each of its samples stands for a patch that grows with it, and its contact
+    /// shadows overlap); far-field proxies do not. With every mesh an occluder, a reach of 0.5 m
+    /// measured lower error than 0.75 m on every scene of `cargo bench --bench far_field`, at
+    /// R = 0.75 m and 2 m alike (0.35 m lower still on most, but not on characters in voxels). With no far-field occluder in the scene, or another blend, the image-space
     /// technique reaches the whole `radius`. Give every mesh that should occlude beyond this
     /// distance a far-field occluder (or cover it with a voxel volume).
     /// Units: metres. Valid: > 0. Default: [`DEFAULT_NEAR_FIELD_RADIUS`].

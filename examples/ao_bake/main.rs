@@ -7,10 +7,11 @@
 //!
 //! A field counts occluders within the radius R of the cameras it will be seen by (`--radius`,
 //! metres, default 0.75, the crate's default), with the near field's share within
-//! `--near-radius` (default 0.75); `--epsilon E` bakes the paper's field instead: hits at any
-//! distance, the grid's extent from eq. 4, border rescale and interior fill. Each mesh primitive
-//! is baked in its own mesh space (the grid follows the object wherever it is
-//! placed) into `DIR/<file>_<mesh>_<primitive>.aofield`, with a progress bar on stderr and one
+//! `--near-radius` (default 0.5, the crate's default); `--epsilon E` bakes the paper's field
+//! instead: hits at any distance, the grid's extent from eq. 4, border rescale and interior fill.
+//! Each mesh primitive is baked in its own mesh space (the grid follows the object wherever it is
+//! placed, and the radii count mesh units: for a model shown at another scale, divide them by
+//! that scale) into `DIR/<file>_<mesh>_<primitive>.aofield`, with a progress bar on stderr and one
 //! summary line per object on stdout. A missing file, a bad number or a scene without meshes
 //! gives a one-line error and exit code 2 (arguments) or 1 (scene).
 

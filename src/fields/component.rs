@@ -17,12 +17,19 @@ use super::format::AoFieldData;
 /// (`ao_bake`, loaded from a `.aofield` file), or let the plugin bake one from the entity's mesh
 /// when it appears: on the async compute pool, cached on disk in [`AoFieldCache`], so the frame
 /// never waits and the next run loads it.
+///
+/// A field the plugin bakes is baked at the entity's world scale, so that it reaches the camera's
+/// radius in metres whatever units the mesh was modelled in (a glTF model in centimetres scaled
+/// by 0.01, a unit plane scaled to a floor); it is baked again, in the background, when that
+/// scale changes by more than about 1 %. A field loaded from a file lies in the mesh's space and
+/// reaches as far in mesh units as it was baked for: bake it at the scale it is shown at.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
 #[reflect(Component, Default, Clone, Debug)]
 pub enum AoField {
-    /// A baked field, e.g. `asset_server.load("crate.aofield")`, in the mesh's space.
+    /// A baked field, e.g. `asset_server.load("crate.aofield")`, in the mesh's space (its reach
+    /// in mesh units).
     Asset(Handle<AoFieldData>),
-    /// Bake from the entity's own mesh with these settings.
+    /// Bake from the entity's own mesh, at its world scale, with these settings.
     Bake(#[reflect(ignore)] BakeSettings),
 }
 

@@ -33,6 +33,10 @@
 //!   points outside it (no interior fill needed) and fades the field out over the half cell next
 //!   to the object, so the object's own surface is left to the near field: an open floor with its
 //!   own field reads 1.
+//! - **Reach in world units.** A field the plugin bakes is baked from the mesh scaled by its
+//!   entity's world scale and placed without that scale, so R counts metres whatever units the
+//!   mesh was modelled in. Baked in mesh space, a model in centimetres scaled by 0.01 reached
+//!   0.01 R and cast almost nothing on the floor it stood on.
 //! - **Cells of about the same size along every axis**, within a budget of `resolution`³ cells:
 //!   a floor's thin grid gets fine cells across its height.
 //!

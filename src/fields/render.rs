@@ -120,7 +120,7 @@ pub(crate) fn extract_fields(
     let buffers = buffers.as_mut();
     let mut used: Vec<AssetId<AoFieldData>> = Vec::new();
     for (field, _, visibility) in &occluders {
-        let id = field.0.id();
+        let id = field.field.id();
         if visibility.is_none_or(|v| v.get()) && fields.contains(id) && !used.contains(&id) {
             used.push(id);
         }
@@ -158,14 +158,16 @@ pub(crate) fn extract_fields(
         if !visibility.is_none_or(|v| v.get()) {
             continue;
         }
-        let id = field.0.id();
+        let id = field.field.id();
         let (Some(data), Some((_, offset))) = (
             fields.get(id),
             buffers.layout.iter().find(|(l, _)| *l == id),
         ) else {
             continue;
         };
-        if let Some(instance) = FieldInstance::new(data, transform.affine(), *offset) {
+        // A baked field lies in the mesh's space scaled to the world's size.
+        let world_from_field = transform.affine() * Affine3A::from_scale(field.baked_scale.recip());
+        if let Some(instance) = FieldInstance::new(data, world_from_field, *offset) {
             buffers.instances.push(instance);
         }
     }

@@ -26,7 +26,15 @@ use crate::spheres::{mesh_morph_weights, skin_joints};
 /// The field an [`AoField`] occluder casts from, added by the plugin once that field exists
 /// (loaded, or baked on load). Until then the occluder casts nothing.
 #[derive(Component, Clone, Debug, PartialEq)]
-pub struct ActiveAoField(pub Handle<AoFieldData>);
+pub struct ActiveAoField {
+    /// The field.
+    pub field: Handle<AoFieldData>,
+    /// The scale the field was baked at: its grid lies in the mesh's space scaled by this (per
+    /// axis, no unit), so that its reach is measured in world units. The entity's own scale is
+    /// taken out where it is placed. `Vec3::ONE` for a field loaded from a file, which lies in
+    /// the mesh's space and reaches as far in mesh units as it was baked for.
+    pub baked_scale: Vec3,
+}
 
 /// On an [`AoField::Bake`] occluder while its field for the current cameras' radii is being baked
 /// (in the background); the field it had before, if any, stays active meanwhile. Tools that
@@ -34,9 +42,9 @@ pub struct ActiveAoField(pub Handle<AoFieldData>);
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PendingAoField;
 
-/// A bake: the mesh, for a posed (skinned or morphed) mesh the entity whose pose it is, and the
-/// settings.
-type BakeKey = (AssetId<Mesh>, Option<Entity>, [u32; 7]);
+/// A bake: the mesh, for a posed (skinned or morphed) mesh the entity whose pose it is, the
+/// settings and the scale (in [`scale_steps`]).
+type BakeKey = (AssetId<Mesh>, Option<Entity>, [u32; 7], [i32; 3]);
 type BakeResult = Result<AoFieldData, String>;
 
 /// Fields baked (or being baked) from meshes this run.
@@ -122,6 +130,29 @@ fn bake_or_load(
     Ok(field)
 }
 
+/// Steps of a scale per doubling: a field is baked again when its entity's scale changes by
+/// more than about 1 %.
+const SCALE_STEPS_PER_OCTAVE: f32 = 64.0;
+
+/// An entity's world scale (per axis, positive) in steps of [`SCALE_STEPS_PER_OCTAVE`], and the
+/// scale those steps stand for. Rays count hits within R world units, so a mesh is baked at its
+/// world scale: baked in mesh space, a model scaled by 0.01 (a glTF file in centimetres) would
+/// reach 0.01 R.
+fn scale_steps(transform: Option<&GlobalTransform>) -> ([i32; 3], Vec3) {
+    let scale = transform.map_or(Vec3::ONE, |t| t.to_scale_rotation_translation().0.abs());
+    let steps = scale.to_array().map(|s| {
+        if s.is_finite() && s > 0.0 {
+            (s.log2() * SCALE_STEPS_PER_OCTAVE)
+                .round()
+                .clamp(-4096.0, 4096.0) as i32
+        } else {
+            0
+        }
+    });
+    let snapped = Vec3::from_array(steps.map(|k| (k as f32 / SCALE_STEPS_PER_OCTAVE).exp2()));
+    (steps, snapped)
+}
+
 /// Frames a skinned or morphed occluder is seen before it is baked, so that an animation set on
 /// the frame it appears has posed it.
 const POSE_FRAMES: u32 = 3;
@@ -157,19 +188,22 @@ type Occluders<'w, 's> = Query<
     ),
 >;
 
-/// The triangles to bake for one occluder, in its mesh's space: the mesh as stored, or for a
-/// skinned or morphed mesh its current pose brought back into the entity's space.
+/// The triangles to bake for one occluder, in its mesh's space scaled by `scale`: the mesh as
+/// stored, or for a skinned or morphed mesh its current pose brought back into the entity's
+/// space.
 fn bake_triangles(
     mesh: &Mesh,
     posed: Option<(&GlobalTransform, &[Affine3A], &[f32])>,
+    scale: Vec3,
 ) -> Vec<Triangle> {
+    let scaled = Affine3A::from_scale(scale);
     let mut scene = TriangleScene::default();
     let Some((transform, joints, weights)) = posed else {
-        scene.add_mesh(mesh, Affine3A::IDENTITY);
+        scene.add_mesh(mesh, scaled);
         return scene.triangles;
     };
     let Ok(rest) = RestMesh::from_mesh(mesh) else {
-        scene.add_mesh(mesh, Affine3A::IDENTITY);
+        scene.add_mesh(mesh, scaled);
         return scene.triangles;
     };
     let pose = Pose {
@@ -178,7 +212,7 @@ fn bake_triangles(
         morph_weights: weights,
     };
     let deformer = Deformer::new(&rest, &pose);
-    let mesh_from_world = transform.affine().inverse();
+    let mesh_from_world = scaled * transform.affine().inverse();
     let points: Vec<Vec3> = (0..rest.positions.len())
         .map(|v| mesh_from_world.transform_point3(deformer.point(v).into()))
         .collect();
@@ -243,8 +277,13 @@ pub(crate) fn resolve_fields(
         } else {
             degenerate.remove(&entity);
         }
+        let (steps, scale) = if placeable {
+            scale_steps(transform)
+        } else {
+            ([0; 3], Vec3::ONE)
+        };
         let handle = match field {
-            AoField::Asset(handle) => Some(Ok(handle.clone())),
+            AoField::Asset(handle) => Some(Ok((handle.clone(), Vec3::ONE))),
             AoField::Bake(settings) => {
                 let Some(mesh) = mesh else {
                     if warned.insert(entity) {
@@ -259,13 +298,18 @@ pub(crate) fn resolve_fields(
                 let settings = settings.for_camera(radius, near);
                 let weights = mesh_morph_weights(morphs, &morph_weights);
                 let posed = skinned.is_some() || weights.iter().any(|w| *w != 0.0);
-                let key = (mesh.id(), posed.then_some(entity), settings_key(&settings));
+                let key = (
+                    mesh.id(),
+                    posed.then_some(entity),
+                    settings_key(&settings),
+                    steps,
+                );
                 // A posed mesh waits a few frames for its animation to be applied.
                 let frames = seen_for.entry(entity).or_insert(0);
                 *frames += 1;
                 let settled = !posed || *frames > POSE_FRAMES;
                 if let Some(result) = baked.ready.get(&key) {
-                    Some(result.clone())
+                    Some(result.clone().map(|handle| (handle, scale)))
                 } else {
                     if settled
                         && !baked.pending.contains_key(&key)
@@ -296,7 +340,7 @@ pub(crate) fn resolve_fields(
                             }
                             _ => None,
                         };
-                        let triangles = bake_triangles(data, pose);
+                        let triangles = bake_triangles(data, pose, scale);
                         let folder = cache.folder.clone();
                         let task = AsyncComputeTaskPool::get()
                             .spawn(async move { bake_or_load(triangles, settings, folder) });
@@ -307,9 +351,11 @@ pub(crate) fn resolve_fields(
             }
         };
         match handle {
-            Some(Ok(handle)) => {
-                if resolved.is_none_or(|r| r.0 != handle) {
-                    commands.entity(entity).insert(ActiveAoField(handle));
+            Some(Ok((field, baked_scale))) => {
+                if resolved.is_none_or(|r| r.field != field || r.baked_scale != baked_scale) {
+                    commands
+                        .entity(entity)
+                        .insert(ActiveAoField { field, baked_scale });
                 }
                 if pending {
                     commands.entity(entity).remove::<PendingAoField>();

@@ -80,6 +80,27 @@ fn a_box_just_off_screen_is_found_by_every_term() {
     );
 }
 
+/// The same box modelled in centimetres (its mesh 100 units wide, scaled by 0.01) on a floor
+/// scaled per axis: every term reaches R in world units, not in mesh units (an AO field baked in
+/// mesh space reached 0.01 R, and missed the occlusion a third-party model casts on its floor).
+#[test]
+fn a_box_modelled_in_centimetres_reaches_as_far() {
+    off_screen(
+        FarScene {
+            strip: Some(STRIP),
+            ..far_scenes::plain(
+                "box beside view, in centimetres",
+                scenes::box_beside_view_scaled(),
+            )
+        },
+        [
+            (FarTerm::Spheres, 0.02),
+            (FarTerm::Fields, 0.02),
+            (FarTerm::Voxels, 0.02),
+        ],
+    );
+}
+
 /// A thin wall (10 cm) just outside the view. Its proxy is one flat box, exact to within 0.02;
 /// voxels likewise; the field's cone is a shape the wall is not (measured 0.03–0.04 over).
 #[test]
@@ -141,9 +162,11 @@ fn an_open_floor_does_not_darken_itself() {
 }
 
 /// In view, the near field already sees the occluders: joined to it, each term must not make the
-/// image worse at 0.75 m (more than 0.005 RMSE); at 2 m, where the screen holds little of what
-/// occludes and the near field's samples stand for large patches, each must cut the error by
-/// 15 %. Boxes, a wall and a ball on a floor, and the project's skinned walker mid-stride.
+/// image worse at 0.75 m (measured 6–36 % better here, 1–50 % on the benchmark's models: beyond
+/// its 0.5 m reach the proxies are more accurate than image-space samples); at 2 m, where the
+/// screen holds little of what occludes and the near field's samples stand for large patches,
+/// each must cut the error by 30 % (measured 41–71 % here, 38–72 % on the benchmark's models).
+/// Boxes, a wall and a ball on a floor, and the project's skinned walker mid-stride.
 #[test]
 fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
     let mut all = far_scenes::procedural();
@@ -165,13 +188,13 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
                 line += &format!(", near+{} {error:.4}", term.name());
                 if radius < 1.0 {
                     assert!(
-                        error <= near_error + 0.005,
+                        error <= near_error,
                         "{name}, R = {radius} m: near+{} {error} vs near {near_error}",
                         term.name()
                     );
                 } else {
                     assert!(
-                        error <= 0.85 * near_error,
+                        error <= 0.70 * near_error,
                         "{name}, R = {radius} m: near+{} {error} vs near {near_error}",
                         term.name()
                     );

@@ -140,7 +140,7 @@ fn ao_bake_writes_a_loadable_field_per_mesh() {
         // About cubic cells, within a budget of 8³.
         let r = field.resolution;
         assert!(r.max_element() <= 16 && r.x * r.y * r.z <= 600, "{r}");
-        assert_eq!((field.reach, field.near_reach), (0.75, 0.75));
+        assert_eq!((field.reach, field.near_reach), (0.75, 0.5));
         assert!(
             field.cells.iter().any(|c| c[0] > 0.1),
             "the field holds occlusion"

@@ -68,6 +68,20 @@ pub fn box_beside_view() -> SceneSpec {
         )
 }
 
+/// [`box_beside_view`] as a model in centimetres brings it: the box's mesh 100 × 120 × 100 units
+/// scaled by 0.01, the floor a 1 × 1 plane scaled to 10 × 10 m (a scale per axis).
+pub fn box_beside_view_scaled() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(0.0, 2.5, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
+        .with(
+            floor(1.0),
+            Transform::from_scale(Vec3::new(10.0, 1.0, 10.0)),
+        )
+        .with(
+            Cuboid::new(100.0, 120.0, 100.0),
+            Transform::from_xyz(2.0, 0.6, 0.0).with_scale(Vec3::splat(0.01)),
+        )
+}
+
 /// The same view with a thin wall (4 m long, 1.2 m high, 10 cm thick) standing just outside the
 /// right edge of the view: a large, thin occluder.
 pub fn wall_beside_view() -> SceneSpec {
