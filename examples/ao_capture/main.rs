@@ -23,7 +23,7 @@ mod options;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState};
@@ -45,6 +45,10 @@ use options::{FarTerm, Options};
 
 /// Frames a scene may take to load before the run gives up.
 const LOAD_TIMEOUT_FRAMES: u32 = 2000;
+/// How long the AO fields of `--technique fields` may take to bake. A bake's time grows with the
+/// mesh's triangles, not with frames: a 60k-triangle model takes seconds to minutes on a small
+/// CPU, while frames run as fast as the renderer allows.
+const BAKE_TIMEOUT: Duration = Duration::from_secs(900);
 
 fn main() {
     let options = match Options::parse(std::env::args().skip(1)) {
@@ -90,6 +94,7 @@ fn main() {
         volume: None,
         stage_start: 0,
         placing: None,
+        started: Instant::now(),
     })
     .add_systems(Startup, load_scene)
     .add_systems(Update, (place_volume, drive).chain());
@@ -125,6 +130,8 @@ struct Capture {
     stage_start: u32,
     /// The read-back of the front ND layer the voxel volume is placed from, while it runs.
     placing: Option<Arc<Mutex<Option<Vec<u8>>>>>,
+    /// When the run began.
+    started: Instant,
 }
 
 fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
@@ -359,9 +366,12 @@ fn drive(
             }
         }
         Stage::Rendering { .. } if fields.iter().any(|(active, pending)| !active || pending) => {
-            // Fields still baking: the capture waits for them, within the load time limit.
-            if capture.frames > LOAD_TIMEOUT_FRAMES {
-                eprintln!("ao_capture: the AO fields were not baked in time");
+            // Fields still baking: the capture waits for them, within the bake time limit.
+            if capture.started.elapsed() > BAKE_TIMEOUT {
+                eprintln!(
+                    "ao_capture: the AO fields were not baked within {} s",
+                    BAKE_TIMEOUT.as_secs()
+                );
                 exit.write(AppExit::error());
             }
         }
