@@ -129,6 +129,18 @@ pub fn third_party() -> Vec<FarScene> {
             "AnimatedMorphCube on floor",
             model("AnimatedMorphCube/AnimatedMorphCube.glb", Some(0), 0.7, 0.5),
         ),
+        model_on_floor(
+            "RiggedFigure on floor",
+            model("RiggedFigure/rigged_figure.glb", Some(0), 0.5, 1.7),
+        ),
+        model_on_floor(
+            "BoxAnimated on floor",
+            model("BoxAnimated/BoxAnimated.glb", Some(0), 1.0, 1.0),
+        ),
+        model_on_floor(
+            "CornellBox on floor",
+            model("CornellBox/CornellBox.glb", None, 0.0, 1.5),
+        ),
         FarScene {
             model: Some(Model {
                 at: Vec2::new(1.9, 0.0),
