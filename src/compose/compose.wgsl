@@ -5,11 +5,13 @@
 // that reach (under `FarFieldBlend::CountOnce`; with the other blends everything is in green).
 // Spheres and AO fields arrive as visibilities, the products over their occluders (Malmer et al.
 // §3.3.2); voxel volumes (Reinbothe et al. §4) as occlusion. Per channel the terms join as
-// independent occluders, 1 − Π(1 − term). Sphere occluders' proxies are not independent: parts of
-// one object stand one behind another as a receiver sees them (a character's arm before its
+// independent occluders, 1 − Π(1 − term). The proxies of a skinned mesh are not independent:
+// parts of one character stand one behind another as a receiver sees them (an arm before its
 // torso), and the product counts the hidden part too; their union is taken halfway between the
 // largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
-// rule measured against ray-traced proxies (see `spheres`). Counted once: within the near field's reach the larger
+// rule measured against ray-traced proxies (see `spheres`). Rigid meshes' proxies (walls, floors,
+// props) multiply: inside a room the walls lie in different directions and hide nothing of one
+// another. Counted once: within the near field's reach the larger
 // of the near field and the red channel counts, because what the ND-buffer misses is most often
 // the hidden side of what it shows (the two cover the same directions); beyond it, the green
 // channel joins as an independent occluder. `Add` adds the near and far terms and clamps
@@ -28,15 +30,21 @@
 @group(0) @binding(5) var visibility: texture_storage_2d<r32float, write>;
 #endif
 
-// Both channels of the proxies' product `occlusion` scaled so that their total is halfway
-// between the largest single proxy's occlusion and the product's total.
-fn sphere_union(occlusion: vec2<f32>, largest: f32) -> vec2<f32> {
+// Both channels of the proxies' product `occlusion` scaled so that the proxies of skinned meshes
+// (whose product leaves `articulated_open` open, the largest single one blocking `largest`) count
+// halfway between that largest one and their product, and every other proxy joins as an
+// independent occluder.
+fn sphere_union(occlusion: vec2<f32>, articulated_open: f32, largest: f32) -> vec2<f32> {
     let product = 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y);
     if product <= 0.0 {
         return occlusion;
     }
-    let together = min(largest, product) + 0.5 * (product - min(largest, product));
-    return occlusion * (together / product);
+    let articulated = 1.0 - articulated_open;
+    let floor = min(largest, articulated);
+    let together = floor + 0.5 * (articulated - floor);
+    let rigid_open = clamp((1.0 - product) / max(articulated_open, 1e-6), 0.0, 1.0);
+    let total = 1.0 - (1.0 - together) * rigid_open;
+    return occlusion * (total / product);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -54,7 +62,7 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     var open = vec2<f32>(1.0);
     if settings.far_field != 0u {
         let spheres = textureLoad(sphere_visibility, pixel, 0);
-        open *= 1.0 - sphere_union(1.0 - spheres.rg, spheres.a);
+        open *= 1.0 - sphere_union(1.0 - spheres.rg, spheres.b, spheres.a);
     }
     if settings.fields != 0u {
         open *= textureLoad(field_visibility, pixel, 0).rg;

@@ -144,18 +144,22 @@ pub struct ProxyCamera {
 }
 
 /// The proxies' union, as `compose.wgsl` takes it: both channels of their product
-/// (`occlusion`) scaled so that their total lies halfway between the largest single proxy's
-/// occlusion and the product's total.
-pub fn sphere_union(occlusion: [f32; 2], largest: f32) -> [f32; 2] {
+/// (`occlusion`) scaled so that the proxies of skinned meshes (whose product leaves
+/// `articulated_open` open, the largest single one blocking `largest`) count halfway between that
+/// largest one and their product, and every other proxy joins as an independent occluder.
+pub fn sphere_union(occlusion: [f32; 2], articulated_open: f32, largest: f32) -> [f32; 2] {
     let product = 1.0 - (1.0 - occlusion[0]) * (1.0 - occlusion[1]);
     if product <= 0.0 {
         return occlusion;
     }
-    let floor = largest.min(product);
-    let together = floor + 0.5 * (product - floor);
+    let articulated = 1.0 - articulated_open;
+    let floor = largest.min(articulated);
+    let together = floor + 0.5 * (articulated - floor);
+    let rigid_open = ((1.0 - product) / articulated_open.max(1e-6)).clamp(0.0, 1.0);
+    let total = 1.0 - (1.0 - together) * rigid_open;
     [
-        occlusion[0] * together / product,
-        occlusion[1] * together / product,
+        occlusion[0] * total / product,
+        occlusion[1] * total / product,
     ]
 }
 
@@ -179,7 +183,7 @@ pub fn far_field_channels(
                 continue;
             }
             let p = view.world_position(x, y, nd.width, nd.height, texel.depth);
-            let (mut open, mut largest) = ([1.0f32; 2], 0.0f32);
+            let (mut open, mut articulated_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
             for occluder in occluders {
                 for proxy in &occluder.spheres {
                     let (extent, reach) = influence(proxy, occluder.reach, camera.radius);
@@ -190,11 +194,15 @@ pub fn far_field_channels(
                         proxy_channels(proxy, p, texel.normal, reach, camera.near_radius, &held);
                     open[0] *= 1.0 - a;
                     open[1] *= 1.0 - b;
-                    largest = largest.max(1.0 - (1.0 - a) * (1.0 - b));
+                    if occluder.articulated {
+                        let both = 1.0 - (1.0 - a) * (1.0 - b);
+                        articulated_open *= 1.0 - both;
+                        largest = largest.max(both);
+                    }
                 }
             }
             out[(y as u32 * nd.width + x as u32) as usize] =
-                sphere_union([1.0 - open[0], 1.0 - open[1]], largest);
+                sphere_union([1.0 - open[0], 1.0 - open[1]], articulated_open, largest);
         }
     }
     out

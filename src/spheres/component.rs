@@ -130,6 +130,10 @@ pub struct OccluderSpheres {
     pub spheres: Vec<OccluderSphere>,
     /// The reach of the [`SphereOccluder`] this mesh belongs to.
     pub reach: ProxyReach,
+    /// The mesh is skinned: its proxies (one or more per bone) stand one behind another as a
+    /// receiver sees them (an arm before the torso), and compose takes their union rather than
+    /// their product. The proxies of rigid meshes join as independent occluders.
+    pub articulated: bool,
 }
 
 /// d_far of Shanmugam & Arikan eq. 5: the distance from a sphere's centre beyond which it

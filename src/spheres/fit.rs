@@ -842,13 +842,12 @@ pub(crate) mod cast {
             );
             let p = centre + dir * size * distance;
             let n = -dir;
-            let (mut open, mut largest) = (1.0, 0.0f32);
+            let mut open = 1.0;
             for q in proxies {
-                let o = proxy_occlusion(q, p, n, reach).clamp(0.0, 1.0);
-                open *= 1.0 - o;
-                largest = largest.max(o);
+                open *= 1.0 - proxy_occlusion(q, p, n, reach).clamp(0.0, 1.0);
             }
-            ours += sphere_union([0.0, 1.0 - open], largest)[1];
+            // A rigid mesh's proxies: no skinned proxy, so the union is their product.
+            ours += sphere_union([0.0, 1.0 - open], 1.0, 0.0)[1];
             theirs += traced(&bvh, p, n, if reach > 0.0 { reach } else { f32::INFINITY });
         }
         (ours / count as f32, theirs / count as f32)

@@ -25,12 +25,15 @@
 //!    - **Counted once.** Under [`FarFieldBlend::CountOnce`](crate::FarFieldBlend::CountOnce)
 //!      the part of a proxy within the near field's reach goes to one channel, left out where
 //!      the ND-buffer holds it (the near field counts that), and the part beyond goes to another.
-//!    - **Together.** Proxies multiply their visibilities per channel, and the buffer also keeps
-//!      the largest single occlusion. Proxies of one object stand one behind another (an arm
-//!      before the torso), so the product counts hidden parts too; compose takes the union
-//!      halfway between the largest proxy and the product. Measured against the proxies
-//!      themselves ray-traced, on the floor around characters and a helmet: that rule is within
-//!      15 % where the product was 40–80 % over.
+//!    - **Together.** Proxies multiply their visibilities per channel; the buffer also keeps the
+//!      product of skinned meshes' proxies alone and the largest of their occlusions. A
+//!      character's proxies stand one behind another (an arm before the torso), so their product
+//!      counts hidden parts too; compose takes their union halfway between the largest proxy and
+//!      the product (measured against the proxies themselves ray-traced, on the floor around
+//!      characters: within 15 % where the product was 40–80 % over), and joins every other
+//!      proxy as an independent occluder ([`OccluderSpheres::articulated`]). Walls, floors and
+//!      props lie in different directions and hide nothing of one another: the union over every
+//!      proxy undercounted a room's walls (the Cornell box at 2 m: 0.162 RMSE, 0.108 now).
 //!
 //! How well the proxies stand for their meshes, measured (`fit` and `far_field` tests): a box
 //! and a wall within 1.5 % of the mesh's own occlusion at a distance, a ball 9 % over, a 3 cm

@@ -23,7 +23,8 @@ use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach}
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT};
 
 /// One proxy as `splat.wgsl` reads it: centre and bounding radius, the three half-extent vectors,
-/// then the kind (0 box, 1 sphere) and eq. 5's d_far (0: the camera's radius).
+/// then the kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and 1 for a proxy of
+/// a skinned mesh (see [`OccluderSpheres::articulated`]).
 type GpuSphere = [Vec4; 5];
 
 /// Every sphere of every occluder this frame, in one buffer all views share.
@@ -62,7 +63,7 @@ pub(crate) fn extract_spheres(
                 proxy.axes.x_axis.extend(0.0),
                 proxy.axes.y_axis.extend(0.0),
                 proxy.axes.z_axis.extend(0.0),
-                Vec4::new(kind, d_far, 0.0, 0.0),
+                Vec4::new(kind, d_far, f32::from(u8::from(occluder.articulated)), 0.0),
             ]);
         }
     }
@@ -112,7 +113,8 @@ impl FromWorld for SplatPipeline {
             dst_factor: BlendFactor::OneMinusSrc,
             operation: BlendOperation::Add,
         };
-        // max(dst, src): the largest single occlusion, for the union estimate in compose.
+        // max(dst, src): the largest single occlusion of a skinned mesh's proxy, for the union
+        // estimate in compose.
         let largest = BlendComponent {
             src_factor: BlendFactor::One,
             dst_factor: BlendFactor::One,
@@ -136,7 +138,7 @@ impl FromWorld for SplatPipeline {
                                 color: multiply,
                                 alpha: largest,
                             }),
-                            write_mask: ColorWrites::RED | ColorWrites::GREEN | ColorWrites::ALPHA,
+                            write_mask: ColorWrites::ALL,
                         })],
                         ..default()
                     }),

@@ -18,7 +18,8 @@ struct Proxy {
     centre_bound: vec4<f32>,
     // Half-extent vectors of a box (world space, metres); a sphere's radius × the identity.
     axes: array<vec4<f32>, 3>,
-    // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius.
+    // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius; z: 1 for a
+    // proxy of a skinned mesh, whose proxies compose joins by their union.
     kind: vec4<f32>,
 }
 
@@ -193,6 +194,8 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         reach = 0.0;
     }
     let occlusion = clamp(proxy_occlusion(proxy, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
-    // Alpha keeps the largest single proxy's occlusion (blended with max).
-    return vec4<f32>(occlusion, 0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y));
+    // Blue multiplies the visibilities of skinned meshes' proxies alone, alpha keeps the largest
+    // of their occlusions (blended with max): compose takes their union.
+    let articulated = select(0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y), proxy.kind.z > 0.5);
+    return vec4<f32>(occlusion, articulated, articulated);
 }

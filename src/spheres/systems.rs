@@ -189,6 +189,7 @@ pub(crate) fn refit_spheres(
         let mut out = OccluderSpheres {
             spheres: Vec::new(),
             reach: occluder.reach,
+            articulated: skinned.is_some(),
         };
         let fitted = match cache.get(mesh3d.id(), occluder.count, occluder.shape, &meshes) {
             Some(Ok(fitted)) => Some(fitted),

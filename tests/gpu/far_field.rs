@@ -165,7 +165,7 @@ fn an_open_floor_does_not_darken_itself() {
 /// image worse at 0.75 m (measured 6–36 % better here, 1–50 % on the benchmark's models: beyond
 /// its 0.5 m reach the proxies are more accurate than image-space samples); at 2 m, where the
 /// screen holds little of what occludes and the near field's samples stand for large patches,
-/// each must cut the error by 30 % (measured 41–71 % here, 38–72 % on the benchmark's models).
+/// each must cut the error by 30 % (measured 41–71 % here, 35–72 % on the benchmark's models).
 /// Boxes, a wall and a ball on a floor, and the project's skinned walker mid-stride.
 #[test]
 fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {

@@ -323,8 +323,8 @@ pub fn floor_points_around(model: &TriangleScene, bvh: &Bvh) -> Vec<Vec3> {
         .collect()
 }
 
-/// The occlusion `proxies` cast within `reach` on a floor point facing up: the product of their
-/// visibilities, the largest single one, and their union as compose takes it.
+/// The occlusion a skinned mesh's `proxies` cast within `reach` on a floor point facing up: the
+/// product of their visibilities, the largest single one, and their union as compose takes it.
 pub fn proxies_on_floor(proxies: &[OccluderSphere], p: Vec3, reach: f32) -> [f32; 3] {
     let (mut open, mut largest) = (1.0, 0.0f32);
     for q in proxies {
@@ -335,6 +335,6 @@ pub fn proxies_on_floor(proxies: &[OccluderSphere], p: Vec3, reach: f32) -> [f32
     [
         1.0 - open,
         largest,
-        sphere_union([0.0, 1.0 - open], largest)[1],
+        sphere_union([0.0, 1.0 - open], open, largest)[1],
     ]
 }
