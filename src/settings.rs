@@ -49,8 +49,9 @@ pub struct DynamicAo {
     /// with distance (each of its samples stands for a patch that grows with it, and its contact
     /// shadows overlap); far-field proxies do not. With every mesh an occluder, a reach of 0.5 m
     /// measured lower error than 0.75 m on every scene of `cargo bench --bench far_field`, at
-    /// R = 0.75 m and 2 m alike (0.35 m lower still on most, but not on characters in voxels). With no far-field occluder in the scene, or another blend, the image-space
-    /// technique reaches the whole `radius`. Give every mesh that should occlude beyond this
+    /// R = 0.75 m and 2 m alike (0.35 m lower still on most, but not on characters in voxels).
+    /// With no far-field occluder in the scene, or another blend, the image-space technique
+    /// reaches the whole `radius`. Give every mesh that should occlude beyond this
     /// distance a far-field occluder (or cover it with a voxel volume).
     /// Units: metres. Valid: > 0. Default: [`DEFAULT_NEAR_FIELD_RADIUS`].
     pub near_field_radius: f32,

@@ -11,10 +11,10 @@
 // largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
 // rule measured against ray-traced proxies (see `spheres`). Rigid meshes' proxies (walls, floors,
 // props) multiply: inside a room the walls lie in different directions and hide nothing of one
-// another. Counted once: within the near field's reach the larger
-// of the near field and the red channel counts, because what the ND-buffer misses is most often
-// the hidden side of what it shows (the two cover the same directions); beyond it, the green
-// channel joins as an independent occluder. `Add` adds the near and far terms and clamps
+// another. Counted once: within the near field's reach the larger of the near field and the red
+// channel counts, because what the ND-buffer misses is most often the hidden side of what it
+// shows (the two cover the same directions); beyond it, the green channel joins as an
+// independent occluder. `Add` adds the near and far terms and clamps
 // (Shanmugam & Arikan 2007, §6); `Max` takes the larger.
 
 #import bevy_dynamic_ao::settings::DynamicAoSettings

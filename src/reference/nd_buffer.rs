@@ -44,6 +44,19 @@ impl ViewMatrices {
         }
     }
 
+    /// How fully the camera sees a face with unit normal `f` at world point `x`, as `seen_face`
+    /// in `spheres/splat.wgsl`: |cos| of the angle between `f` and the direction to the eye
+    /// (the view's backward axis when orthographic), over 0.3, at most 1.
+    pub fn seen_face(&self, x: Vec3, f: Vec3) -> f32 {
+        let world_from_view = self.view_from_world.inverse();
+        let to_eye = if self.clip_from_view.w_axis.w == 1.0 {
+            world_from_view.z_axis.truncate()
+        } else {
+            world_from_view.w_axis.truncate() - x
+        };
+        (to_eye.normalize_or_zero().dot(f).abs() / 0.3).clamp(0.0, 1.0)
+    }
+
     /// World position of the centre of pixel (x, y) of a `width`×`height` viewport at
     /// reverse-Z `depth`.
     pub fn world_position(&self, x: i32, y: i32, width: u32, height: u32, depth: f32) -> Vec3 {

@@ -118,7 +118,7 @@ pub fn sphere_occlusion_within(p: Vec3, n: Vec3, centre: Vec3, radius: f32, reac
 /// One proxy's occlusion of the receiver (`p`, `n`) within `reach` (≤ 0: no limit): the share of
 /// its ambient light the proxy blocks, all of it counted.
 pub fn proxy_occlusion(proxy: &OccluderSphere, p: Vec3, n: Vec3, reach: f32) -> f32 {
-    proxy_channels(proxy, p, n, reach, 0.0, &|_, _| 0.0)[1]
+    proxy_channels(proxy, p, n, reach, 0.0, &|_, _| 0.0, &|_, _| 0.0)[1]
 }
 
 /// How far from its centre a proxy's occlusion reaches under `reach` with camera radius `radius`,
@@ -190,8 +190,15 @@ pub fn far_field_channels(
                     if p.distance(proxy.center) > extent {
                         continue;
                     }
-                    let [a, b] =
-                        proxy_channels(proxy, p, texel.normal, reach, camera.near_radius, &held);
+                    let [a, b] = proxy_channels(
+                        proxy,
+                        p,
+                        texel.normal,
+                        reach,
+                        camera.near_radius,
+                        &held,
+                        &|x, f| view.seen_face(x, f),
+                    );
                     open[0] *= 1.0 - a;
                     open[1] *= 1.0 - b;
                     if occluder.articulated {
@@ -223,7 +230,8 @@ pub fn far_field_occlusion(
 }
 
 /// One proxy's occlusion in the two channels `splat.wgsl` writes: the part within `near` (> 0)
-/// the ND-buffer does not hold, and the share of the rest; with `near` ≤ 0, (0, all).
+/// the ND-buffer does not hold (`held`, times `seen_face` for a box's face: how fully the camera
+/// sees it), and the share of the rest; with `near` ≤ 0, (0, all).
 pub fn proxy_channels(
     proxy: &OccluderSphere,
     p: Vec3,
@@ -231,6 +239,7 @@ pub fn proxy_channels(
     reach: f32,
     near: f32,
     held: &dyn Fn(Vec3, f32) -> f32,
+    seen_face: &dyn Fn(Vec3, Vec3) -> f32,
 ) -> [f32; 2] {
     let tolerance = 0.1 * near;
     let centre = proxy.center;
@@ -282,7 +291,7 @@ pub fn proxy_channels(
                     let inner_reach = if reach > 0.0 { near.min(reach) } else { near };
                     let (inner, at) = face_occlusion(p, n, face_centre, f, (b, c), inner_reach);
                     if inner > 0.0 {
-                        occlusion[0] += inner * (1.0 - held(at, tolerance));
+                        occlusion[0] += inner * (1.0 - held(at, tolerance) * seen_face(at, f));
                     }
                     if !one_part {
                         let all = face_occlusion(p, n, face_centre, f, (b, c), reach).0;

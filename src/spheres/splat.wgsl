@@ -105,6 +105,17 @@ fn held(x: vec3<f32>, tolerance: f32) -> f32 {
     return nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, x, tolerance);
 }
 
+// How fully the camera sees a face with unit normal `f` at `x`: image-space samples are spread
+// over the screen, so a face seen edge-on gets almost none of them, even where the ND-buffer
+// holds it.
+fn seen_face(x: vec3<f32>, f: vec3<f32>) -> f32 {
+    var to_eye = view.world_from_view[2].xyz;
+    if view.clip_from_view[3][3] != 1.0 {
+        to_eye = view.world_position - x;
+    }
+    return clamp(abs(dot(normalize(to_eye), f)) / 0.3, 0.0, 1.0);
+}
+
 // The proxy's occlusion within `reach`, in two parts: x, the part within the near field's reach
 // where the ND-buffer does not hold it; y, the part beyond the near field's reach, as a share of
 // the directions the near part leaves open (the two parts cover different directions, so they
@@ -162,7 +173,7 @@ fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2
             }
             let inner = face_occlusion(p, n, face_centre, f, b, c, select(near, min(near, reach), reach > 0.0));
             if inner.occlusion > 0.0 {
-                occlusion.x += inner.occlusion * (1.0 - held(inner.centre, tolerance));
+                occlusion.x += inner.occlusion * (1.0 - held(inner.centre, tolerance) * seen_face(inner.centre, f));
             }
             if !one_part {
                 let all = face_occlusion(p, n, face_centre, f, b, c, reach).occlusion;

@@ -74,12 +74,14 @@ pub fn model_on_floor(name: &'static str, model: Model) -> FarScene {
 /// The strip of floor beside an occluder just right of the view: the last 12 columns.
 pub const STRIP: std::ops::Range<u32> = WIDTH - 12..WIDTH;
 
-/// The scenes of `tests/gpu/scenes.rs`: objects in view, and a box and a wall just outside it.
+/// The scenes of `tests/gpu/scenes.rs`: objects in view (the first four), and a box and a wall
+/// just outside it.
 pub fn procedural() -> Vec<FarScene> {
     vec![
         plain("cube on plane", scenes::cube_on_plane()),
         plain("room corner", scenes::room_corner()),
         plain("ball near wall", scenes::ball_near_wall()),
+        plain("open room", scenes::open_room()),
         FarScene {
             strip: Some(STRIP),
             ..plain("box beside view", scenes::box_beside_view())

@@ -93,6 +93,41 @@ pub fn wall_beside_view() -> SceneSpec {
         )
 }
 
+/// A room open at the front, as the Cornell box is built: a 1.6 m cube of 4 cm walls, ceiling and
+/// back wall, with a tall and a short box inside, standing on a floor and seen from outside the
+/// open side. Every wall a thin, large occluder; the receivers inside see walls in every
+/// direction.
+pub fn open_room() -> SceneSpec {
+    let (size, wall) = (1.6, 0.04);
+    let half = size / 2.0;
+    SceneSpec::new(Transform::from_xyz(1.0, 1.5, 3.4).looking_at(Vec3::new(0.0, 0.7, 0.0), Vec3::Y))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(wall, size, size),
+            Transform::from_xyz(-half, half, 0.0),
+        )
+        .with(
+            Cuboid::new(wall, size, size),
+            Transform::from_xyz(half, half, 0.0),
+        )
+        .with(
+            Cuboid::new(size, size, wall),
+            Transform::from_xyz(0.0, half, -half),
+        )
+        .with(
+            Cuboid::new(size, wall, size),
+            Transform::from_xyz(0.0, size, 0.0),
+        )
+        .with(
+            Cuboid::new(0.45, 0.9, 0.45),
+            Transform::from_xyz(-0.3, 0.45, -0.25).with_rotation(Quat::from_rotation_y(0.3)),
+        )
+        .with(
+            Cuboid::new(0.45, 0.45, 0.45),
+            Transform::from_xyz(0.3, 0.225, 0.25).with_rotation(Quat::from_rotation_y(-0.3)),
+        )
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [

@@ -9,7 +9,10 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
 
+use bevy::mesh::skinning::SkinnedMesh;
+
 use crate::harness::{Gpu, SceneSpec, difference_stats};
+use crate::skinned::{LENGTH, column, column_bindposes};
 
 fn occluder(count: u32) -> SphereOccluder {
     SphereOccluder { count, ..default() }
@@ -31,6 +34,32 @@ fn spheres_of(gpu: &mut Gpu) -> Vec<OccluderSpheres> {
         .collect()
 }
 
+/// A skinned column standing at `at`, bent 1 rad at its elbow so that its two bones' boxes stand
+/// one beside the other as the floor around it sees them.
+fn bent_column(gpu: &mut Gpu, at: Vec3) {
+    let world = gpu.app.world_mut();
+    let bindposes = column_bindposes(world);
+    let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
+    let root = world.spawn(Transform::from_translation(at)).id();
+    let elbow = world
+        .spawn((
+            Transform::from_xyz(0.0, LENGTH / 2.0, 0.0).with_rotation(Quat::from_rotation_z(-1.0)),
+            ChildOf(root),
+        ))
+        .id();
+    world.spawn((
+        Mesh3d(mesh),
+        SkinnedMesh {
+            inverse_bindposes: bindposes,
+            joints: vec![root, elbow],
+        },
+        SphereOccluder::default(),
+        Transform::from_translation(at),
+    ));
+}
+
+/// The splat against its CPU twin on rigid occluders (a ball, a lying capsule, a small ball near
+/// the eye) and a skinned column, whose proxies compose joins differently.
 #[test]
 fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
     let camera = Transform::from_xyz(2.0, 1.8, 2.8).looking_at(Vec3::new(0.0, 0.35, 0.0), Vec3::Y);
@@ -59,6 +88,7 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
         );
     for orthographic in [false, true] {
         let mut gpu = Gpu::new(&scene, far_field_only());
+        bent_column(&mut gpu, Vec3::new(-1.0, 0.0, 0.6));
         if orthographic {
             let camera = gpu.camera;
             gpu.app
@@ -74,8 +104,11 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
         let frame = gpu.frame(4);
         let occluders = spheres_of(&mut gpu);
         let count: usize = occluders.iter().map(|o| o.spheres.len()).sum();
-        assert_eq!(occluders.len(), 3);
-        assert!(count >= 3, "{count} proxies");
+        // Compose joins a skinned mesh's proxies by their union and the rest by their product:
+        // both kinds take part.
+        assert_eq!(occluders.len(), 4);
+        assert_eq!(occluders.iter().filter(|o| o.articulated).count(), 1);
+        assert!(count >= 5, "{count} proxies");
 
         // The far field alone counts every occluder within the camera's radius.
         let camera = ProxyCamera {
