@@ -91,6 +91,7 @@ impl Plugin for DynamicAoPlugin {
     fn build(&self, app: &mut App) {
         load_shader_library!(app, "shaders/nd_buffer.wgsl");
         load_shader_library!(app, "shaders/sampling.wgsl");
+        load_shader_library!(app, "shaders/math.wgsl");
         load_shader_library!(app, "shaders/settings.wgsl");
         load_shader_library!(app, "shaders/image_space_bindings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");

@@ -7,6 +7,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
 #import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::math::wendland
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
@@ -30,15 +31,6 @@ fn value(l: vec2<i32>) -> vec2<f32> {
 
 // Screen-space support of w_d, full-resolution pixels (the m of eq. 6).
 const WINDOW: f32 = 4.0;
-
-// Wendland's compactly supported kernel, eq. 3.
-fn wendland(t: f32, h: f32) -> f32 {
-    if t > h {
-        return 0.0;
-    }
-    let s = 1.0 - t / h;
-    return s * s * s * s * (4.0 * t / h + 1.0);
-}
 
 @compute @workgroup_size(8, 8, 1)
 fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -9,23 +9,11 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
 }
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, pixel_world_size}
-#import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT}
+#import bevy_dynamic_ao::math::TAU
+#import bevy_dynamic_ao::image_space_bindings::{view_position, view_position_at}
 
-const TAU: f32 = 6.28318530717958648;
 const HALF_PI: f32 = 1.57079632679489662;
-// 1 / 2³²: maps a 32-bit hash into [0, 1).
-const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
-
-// View-space position of the centre of `pixel` at reverse-Z depth `depth`.
-fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
-    return view_position_at((vec2<f32>(pixel) + 0.5) / size, depth);
-}
-
-// View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
-fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
-    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return p.xyz / p.w;
-}
 
 // The tangent-plane vector that one pixel along image direction `dir` covers: the view ray
 // through that point meets the plane through `p` with normal `n`. Stepping in the image moves

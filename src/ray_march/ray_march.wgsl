@@ -5,16 +5,9 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
 }
 #import bevy_dynamic_ao::nd_buffer::decode_normal
-#import bevy_dynamic_ao::sampling::pcg_hash
-
-const TAU: f32 = 6.28318530717958648;
-const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
-
-fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
-    let uv = (vec2<f32>(pixel) + 0.5) / size;
-    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return p.xyz / p.w;
-}
+#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT}
+#import bevy_dynamic_ao::math::{TAU, tangent_frame}
+#import bevy_dynamic_ao::image_space_bindings::view_position
 
 // Whether the view-space point `x` lies inside the geometry the two layers bound.
 fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
@@ -64,12 +57,9 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     }
     let p = view_position(pixel, size, depth);
     let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
-    // Orthonormal basis around n (Duff et al. 2017), identical on the CPU.
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    let t1 = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    let t2 = vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+    let frame = tangent_frame(n);
+    let t1 = frame[0];
+    let t2 = frame[1];
 
     let radius = settings.radius;
     let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x2c1b3c6du));

@@ -4,9 +4,7 @@
 use bevy::math::{IVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
-use super::sampling::pcg_hash;
-
-const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
+use super::sampling::{HASH_TO_UNIT, pcg_hash};
 
 /// Parameters of one evaluation, as the GPU uniform carries them.
 #[derive(Clone, Copy, Debug)]

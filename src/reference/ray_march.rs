@@ -3,9 +3,7 @@
 use bevy::math::{IVec2, Vec3, Vec4Swizzles};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
-use super::sampling::pcg_hash;
-
-const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
+use super::sampling::{HASH_TO_UNIT, pcg_hash, tangent_frame};
 
 /// Parameters of one evaluation, as the GPU uniform carries them.
 #[derive(Clone, Copy, Debug)]
@@ -91,11 +89,8 @@ pub fn pixel_occlusion(
     let n = (view.view_from_world * texel.normal.extend(0.0))
         .xyz()
         .normalize();
-    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    let t1 = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    let t2 = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    let frame = tangent_frame(n);
+    let (t1, t2) = (frame.x_axis, frame.y_axis);
     let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x2c1b_3c6d));
     let rotation = hash as f32 * HASH_TO_UNIT;
     let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;

@@ -1,9 +1,11 @@
 //! Sample patterns, bit-identical to `shaders/sampling.wgsl`.
 
-use bevy::math::Vec2;
+use bevy::math::{Mat3, Vec2, Vec3};
 
 const GOLDEN_ANGLE: f32 = 2.399_963_2;
 const HASH_TO_ANGLE: f32 = 1.462_918_1e-9;
+/// 1 / 2³²: maps a 32-bit hash into [0, 1).
+pub const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
 
 /// PCG hash (Jarzynski & Olano 2020).
 pub fn pcg_hash(v: u32) -> u32 {
@@ -22,6 +24,19 @@ pub fn disk_sample(i: u32, count: u32, radius: f32, rotation: f32) -> Vec2 {
     let r = radius * ((i as f32 + 0.5) / count as f32).sqrt();
     let angle = i as f32 * GOLDEN_ANGLE + rotation;
     Vec2::new(angle.cos(), angle.sin()) * r
+}
+
+/// An orthonormal frame around unit `n` (Duff et al. 2017): columns tangent, bitangent, normal.
+/// `tangent_frame` in `shaders/math.wgsl` is the GPU twin.
+pub fn tangent_frame(n: Vec3) -> Mat3 {
+    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    Mat3::from_cols(
+        Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        Vec3::new(b, s + n.y * n.y * a, -n.y),
+        n,
+    )
 }
 
 #[cfg(test)]

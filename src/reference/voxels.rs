@@ -2,12 +2,12 @@
 //! bounding box, and the AO sampling of `voxels/voxel_ao.wgsl`, step for step with the same
 //! hashes, so the GPU passes can be checked against them.
 
-use bevy::math::{Affine3A, Mat3, Vec2, Vec3};
+use bevy::math::{Affine3A, Vec2, Vec3};
 use bevy::platform::collections::HashMap;
 
 use super::filter::wendland;
 use super::nd_buffer::{NdBuffer, ViewMatrices};
-use super::sampling::pcg_hash;
+use super::sampling::{pcg_hash, tangent_frame};
 use super::scene::Triangle;
 use crate::voxels::{VoxelFalloff, VoxelMarch, VoxelRays};
 
@@ -257,18 +257,6 @@ pub fn cell_hash(p: Vec3, cell: f32) -> u32 {
 
 fn unit_float(h: u32) -> f32 {
     (h >> 8) as f32 / 16_777_216.0
-}
-
-/// An orthonormal frame around unit `n` (Duff et al. 2017): columns tangent, bitangent, normal.
-pub fn tangent_frame(n: Vec3) -> Mat3 {
-    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    Mat3::from_cols(
-        Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
-        Vec3::new(b, s + n.y * n.y * a, -n.y),
-        n,
-    )
 }
 
 /// Ray `i` of `count` around +Z: a spiral over the cone of half-angle acos(cos_spread), uniform

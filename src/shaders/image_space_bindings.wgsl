@@ -1,5 +1,6 @@
 // The bindings every image-space technique reads (`image_space.rs` builds the layout): the view,
-// the per-view settings, both ND-buffer layers and the occlusion buffer the technique writes.
+// the per-view settings, both ND-buffer layers and the occlusion buffer the technique writes; and
+// the view-space reconstruction they share.
 
 #define_import_path bevy_dynamic_ao::image_space_bindings
 
@@ -13,3 +14,14 @@
 @group(0) @binding(4) var back_depth: texture_depth_2d;
 @group(0) @binding(5) var back_normal: texture_2d<f32>;
 @group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
+
+// View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
+fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
+    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+// View-space position of the centre of `pixel` at reverse-Z depth `depth`.
+fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
+    return view_position_at((vec2<f32>(pixel) + 0.5) / size, depth);
+}

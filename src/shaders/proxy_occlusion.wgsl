@@ -15,8 +15,7 @@
 #define_import_path bevy_dynamic_ao::proxy_occlusion
 
 #import bevy_dynamic_ao::cap_occlusion::cap_occlusion
-
-const TAU: f32 = 6.283185307179586;
+#import bevy_dynamic_ao::math::TAU
 // √π / 2: half the side of the square with the area of the unit disk.
 const SQUARE_OF_DISK: f32 = 0.886226925452758;
 

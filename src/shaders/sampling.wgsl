@@ -3,6 +3,8 @@
 #define_import_path bevy_dynamic_ao::sampling
 
 const GOLDEN_ANGLE: f32 = 2.39996322972865332;
+// 1 / 2³²: maps a 32-bit hash into [0, 1).
+const HASH_TO_UNIT: f32 = 2.3283064365386963e-10;
 // 2π / 2³²: maps a 32-bit hash to an angle.
 const HASH_TO_ANGLE: f32 = 1.4629180792671596e-9;
 

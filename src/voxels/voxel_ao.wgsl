@@ -16,9 +16,10 @@
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::sampling::pcg_hash
 #import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::math::{tangent_frame, wendland}
 #import bevy_dynamic_ao::voxel_grid::{
-    VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, tangent_frame, to_grid,
-    to_grid_direction, unit_float, wendland,
+    VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, to_grid, to_grid_direction,
+    unit_float,
 }
 
 @group(0) @binding(0) var<uniform> view: View;

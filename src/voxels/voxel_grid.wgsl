@@ -4,6 +4,7 @@
 #define_import_path bevy_dynamic_ao::voxel_grid
 
 #import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::math::TAU
 
 // `voxels::gather::GpuVolume` on the Rust side.
 struct VoxelVolume {
@@ -40,7 +41,6 @@ struct VoxelParams {
 }
 
 const GOLDEN_RATIO_FRACTION: f32 = 0.618033988749895;
-const TAU: f32 = 6.283185307179586;
 
 fn to_grid(volume: VoxelVolume, p: vec3<f32>) -> vec3<f32> {
     let h = vec4<f32>(p, 1.0);
@@ -60,15 +60,6 @@ fn to_grid_direction(volume: VoxelVolume, d: vec3<f32>) -> vec3<f32> {
     );
 }
 
-// Wendland's compactly supported kernel, eq. 3.
-fn wendland(t: f32, h: f32) -> f32 {
-    if t > h {
-        return 0.0;
-    }
-    let s = 1.0 - t / h;
-    return s * s * s * s * (4.0 * t / h + 1.0);
-}
-
 // A hash of the world-space noise cell holding `p`: the same surface point gets the same rays
 // wherever the camera is (the object-space jitter of §6).
 fn cell_hash(p: vec3<f32>, cell: f32) -> u32 {
@@ -79,16 +70,6 @@ fn cell_hash(p: vec3<f32>, cell: f32) -> u32 {
 // A uniform number in [0, 1) from a hash, exact in f32.
 fn unit_float(h: u32) -> f32 {
     return f32(h >> 8u) / 16777216.0;
-}
-
-// An orthonormal frame around unit `n` (Duff et al. 2017).
-fn tangent_frame(n: vec3<f32>) -> mat3x3<f32> {
-    let s = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
-    return mat3x3<f32>(t, bt, n);
 }
 
 // Ray `i` of `count`: a regular spiral over the cone of half-angle acos(cos_spread) around the
