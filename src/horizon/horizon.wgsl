@@ -6,12 +6,12 @@
 // `reference::horizon` is the CPU twin; keep the two in step.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
+    view_position, view_position_at,
 }
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, pixel_world_size}
+#import bevy_dynamic_ao::nd_buffer::pixel_world_size
 #import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT}
 #import bevy_dynamic_ao::math::TAU
-#import bevy_dynamic_ao::image_space_bindings::{view_position, view_position_at}
 
 const HALF_PI: f32 = 1.57079632679489662;
 
@@ -33,30 +33,21 @@ fn tangent_along(pixel: vec2<i32>, size: vec2<f32>, dir: vec2<f32>, p: vec3<f32>
 
 @compute @workgroup_size(8, 8, 1)
 fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
-    // At half resolution each invocation computes the full-resolution pixel at twice its index
-    // and writes one texel of the half-size buffer.
-    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
-    let out_pixel = vec2<i32>(invocation.xy);
-    let dims = textureDimensions(front_depth);
-    if id.x >= dims.x || id.y >= dims.y {
+    let r = receiver(invocation);
+    if !r.shade {
         return;
     }
-    let pixel = vec2<i32>(id.xy);
-    let size = vec2<f32>(dims);
-    let depth = textureLoad(front_depth, pixel, 0);
-    let world_normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
-    if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
-        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
-        return;
-    }
-    let p = view_position(pixel, size, depth);
-    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    let pixel = r.pixel;
+    let size = r.size;
+    let dims = vec2<i32>(size);
+    let p = view_position(pixel, size, r.depth);
+    let n = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
     let radius = settings.radius;
     let radius_px = radius / pixel_world_size(view, -p.z, size.y);
     // Fewer steps where the radius covers fewer pixels: never two steps in one pixel.
     let steps = clamp(u32(radius_px), 1u, settings.horizon_steps);
     let step_px = radius_px / f32(steps);
-    let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x68bc21ebu));
+    let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x68bc21ebu));
     let rotation = f32(hash) * HASH_TO_UNIT;
     let pixel_jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
     let directions = settings.horizon_directions;
@@ -76,7 +67,7 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
         } else if mode == 2u {
             jitter = f32(pcg_hash(hash ^ ((i + 1u) * 0x9e3779b9u))) * HASH_TO_UNIT;
             let q = pixel + vec2<i32>(floor(dir + 0.5));
-            if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(dims)) && any(q != pixel) {
+            if all(q >= vec2<i32>(0)) && all(q < dims) && any(q != pixel) {
                 let dq = textureLoad(front_depth, q, 0);
                 if dq > 0.0 {
                     let v = view_position(q, size, dq) - p;
@@ -91,7 +82,7 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
         for (var k = 0u; k < steps; k++) {
             let offset = dir * ((f32(k) + jitter) * step_px + 1.0);
             let q = pixel + vec2<i32>(floor(offset + 0.5));
-            if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
+            if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= dims) {
                 continue;
             }
             let dq = textureLoad(front_depth, q, 0);
@@ -117,5 +108,5 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
         sum += ao;
     }
     let value = settings.horizon_contrast * settings.intensity * sum / f32(directions);
-    textureStore(occlusion, out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
 }

@@ -2,7 +2,7 @@
 // `reference::near_field` evaluates the same steps on the CPU; keep the two in step.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
 }
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
 #import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
@@ -45,23 +45,14 @@ fn occluder(
 
 @compute @workgroup_size(8, 8, 1)
 fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
-    // At half resolution each invocation computes the full-resolution pixel at twice its index
-    // and writes one texel of the half-size buffer.
-    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
-    let out_pixel = vec2<i32>(invocation.xy);
-    let dims = textureDimensions(front_depth);
-    if id.x >= dims.x || id.y >= dims.y {
+    let r = receiver(invocation);
+    if !r.shade {
         return;
     }
-    let pixel = vec2<i32>(id.xy);
-    let size = vec2<f32>(dims);
-    let depth = textureLoad(front_depth, pixel, 0);
-    let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
-    if depth <= 0.0 || dot(n, n) == 0.0 {
-        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
-        return;
-    }
-    let p = world_position(view, pixel, size, depth);
+    let pixel = r.pixel;
+    let size = r.size;
+    let n = r.normal;
+    let p = world_position(view, pixel, size, r.depth);
 
     // r_far projected at the receiver, pixels; the sample count follows its area (fig. 4).
     let radius_px = settings.radius / pixel_world_size(view, view_depth(view, p), size.y);
@@ -70,14 +61,14 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // Each sample stands for area / count pixels; a sphere of that cross-section has a radius
     // of this many pixel sizes.
     let sphere_scale = radius_px / sqrt(f32(count));
-    let rotation = pixel_rotation(id.xy);
+    let rotation = pixel_rotation(vec2<u32>(pixel));
 
     // Open fraction left by the occluders so far: 1 − Π(1 − A_ψ).
     var open = 1.0;
     for (var i = 0u; i < count; i++) {
         let offset = disk_sample(i, count, radius_px, rotation);
         let q = pixel + vec2<i32>(floor(offset + 0.5));
-        if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(dims)) {
+        if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(size)) {
             continue;
         }
         open *= 1.0 - occluder(q, textureLoad(front_depth, q, 0),
@@ -87,5 +78,5 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
                 textureLoad(back_normal, q, 0).xyz, size, p, n, sphere_scale);
         }
     }
-    textureStore(occlusion, out_pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
+    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
 }

@@ -2,12 +2,11 @@
 // "Ray-Marched Ambient Occlusion"). `reference::ray_march` is the CPU twin.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion,
+    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
+    view_position,
 }
-#import bevy_dynamic_ao::nd_buffer::decode_normal
 #import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
-#import bevy_dynamic_ao::image_space_bindings::view_position
 
 // Whether the view-space point `x` lies inside the geometry the two layers bound.
 fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
@@ -39,30 +38,21 @@ fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
 
 @compute @workgroup_size(8, 8, 1)
 fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
-    // At half resolution each invocation computes the full-resolution pixel at twice its index
-    // and writes one texel of the half-size buffer.
-    let id = invocation * vec3<u32>(settings.resolution_scale, settings.resolution_scale, 1u);
-    let out_pixel = vec2<i32>(invocation.xy);
-    let dims = vec2<i32>(textureDimensions(front_depth));
-    if i32(id.x) >= dims.x || i32(id.y) >= dims.y {
+    let r = receiver(invocation);
+    if !r.shade {
         return;
     }
-    let pixel = vec2<i32>(id.xy);
-    let size = vec2<f32>(dims);
-    let depth = textureLoad(front_depth, pixel, 0);
-    let world_normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
-    if depth <= 0.0 || dot(world_normal, world_normal) == 0.0 {
-        textureStore(occlusion, out_pixel, vec4<f32>(0.0));
-        return;
-    }
-    let p = view_position(pixel, size, depth);
-    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    let pixel = r.pixel;
+    let size = r.size;
+    let dims = vec2<i32>(size);
+    let p = view_position(pixel, size, r.depth);
+    let n = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
     let frame = tangent_frame(n);
     let t1 = frame[0];
     let t2 = frame[1];
 
     let radius = settings.radius;
-    let hash = pcg_hash(id.x ^ pcg_hash(id.y ^ 0x2c1b3c6du));
+    let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x2c1b3c6du));
     let rotation = f32(hash) * HASH_TO_UNIT;
     let jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
     let directions = settings.ray_directions;
@@ -87,5 +77,5 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
         }
     }
     let value = settings.intensity * f32(hits) / f32(directions * elevations);
-    textureStore(occlusion, out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
 }

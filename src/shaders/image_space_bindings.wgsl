@@ -1,11 +1,12 @@
 // The bindings every image-space technique reads (`image_space.rs` builds the layout): the view,
 // the per-view settings, both ND-buffer layers and the occlusion buffer the technique writes; and
-// the view-space reconstruction they share.
+// the receiver start-up and the view-space reconstruction they share.
 
 #define_import_path bevy_dynamic_ao::image_space_bindings
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::nd_buffer::decode_normal
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
@@ -24,4 +25,44 @@ fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
 // View-space position of the centre of `pixel` at reverse-Z depth `depth`.
 fn view_position(pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
     return view_position_at((vec2<f32>(pixel) + 0.5) / size, depth);
+}
+
+// The surface one invocation shades.
+struct Receiver {
+    // Its full-resolution pixel.
+    pixel: vec2<i32>,
+    // The texel of the occlusion buffer it writes (half resolution: half of `pixel`).
+    out_pixel: vec2<i32>,
+    // The full-resolution image size, pixels.
+    size: vec2<f32>,
+    // Reverse-Z depth of the front layer.
+    depth: f32,
+    // World-space unit normal of the front layer.
+    normal: vec3<f32>,
+    // False where there is nothing to shade: outside the image, or background (already written
+    // as open).
+    shade: bool,
+}
+
+// The receiver of `invocation`. At half resolution each invocation computes the full-resolution
+// pixel at twice its index and writes one texel of the half-size buffer.
+fn receiver(invocation: vec3<u32>) -> Receiver {
+    var r: Receiver;
+    let id = invocation.xy * settings.resolution_scale;
+    let dims = textureDimensions(front_depth);
+    r.out_pixel = vec2<i32>(invocation.xy);
+    r.pixel = vec2<i32>(id);
+    r.size = vec2<f32>(dims);
+    r.shade = false;
+    if id.x >= dims.x || id.y >= dims.y {
+        return r;
+    }
+    r.depth = textureLoad(front_depth, r.pixel, 0);
+    r.normal = decode_normal(textureLoad(front_normal, r.pixel, 0).xyz);
+    if r.depth <= 0.0 || dot(r.normal, r.normal) == 0.0 {
+        textureStore(occlusion, r.out_pixel, vec4<f32>(0.0));
+        return r;
+    }
+    r.shade = true;
+    return r;
 }
