@@ -9,7 +9,6 @@ use bevy::ecs::prelude::*;
 use bevy::render::{
     GpuResourceAppExt, Render, RenderApp, RenderSystems,
     camera::ExtractedCamera,
-    diagnostic::RecordDiagnostics,
     extract_component::{ComponentUniforms, DynamicUniformIndex},
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
@@ -20,6 +19,7 @@ use bevy::render::{
 };
 use bevy::utils::default;
 
+use crate::dispatch::{ComputeStep, record_passes};
 use crate::schedule::DynamicAoSystems;
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
@@ -179,27 +179,14 @@ fn image_space_pass(
         AoTechnique::RayMarch => "dynamic_ao_ray_march",
         _ => "dynamic_ao_near_field",
     };
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let time_span = diagnostics.time_span(ctx.command_encoder(), label);
-    let encoder = ctx.command_encoder();
-    encoder.push_debug_group(label);
-    {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(compute_pipeline);
-        pass.set_bind_group(
-            0,
-            &bind_group.0,
-            &[view_offset.offset, settings_index.index()],
-        );
-        // One invocation per texel of the occlusion buffer (half size at half resolution).
-        let scale = if ao_view.half_resolution { 2 } else { 1 };
-        let texels = (size + (scale - 1)) / scale;
-        pass.dispatch_workgroups(texels.x.div_ceil(8), texels.y.div_ceil(8), 1);
-    }
-    encoder.pop_debug_group();
-    time_span.end(ctx.command_encoder());
+    // One invocation per texel of the occlusion buffer (half size at half resolution).
+    let scale = if ao_view.half_resolution { 2 } else { 1 };
+    let step = ComputeStep {
+        label,
+        pipeline: compute_pipeline,
+        bind_group: &bind_group.0,
+        offsets: &[view_offset.offset, settings_index.index()],
+        texels: (size + (scale - 1)) / scale,
+    };
+    record_passes(&mut ctx, label, true, &[step]);
 }

@@ -41,6 +41,7 @@
 #![warn(missing_docs)]
 
 pub mod compose;
+mod dispatch;
 pub mod fields;
 pub mod filter;
 pub mod horizon;

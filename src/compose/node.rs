@@ -5,7 +5,7 @@ use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
     extract_component::DynamicUniformIndex,
-    render_resource::{ComputePassDescriptor, PipelineCache, RenderPassDescriptor},
+    render_resource::{PipelineCache, RenderPassDescriptor},
     renderer::{RenderContext, ViewQuery},
     view::ViewTarget,
 };
@@ -13,6 +13,7 @@ use bevy::render::{
 use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
+use crate::dispatch::{ComputeStep, record_passes};
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn compose_pass(
@@ -39,22 +40,14 @@ pub(crate) fn compose_pass(
         return;
     };
 
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_compose");
-    let encoder = ctx.command_encoder();
-    encoder.push_debug_group("dynamic_ao_compose");
-    {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some("dynamic_ao_compose"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(compute_pipeline);
-        pass.set_bind_group(0, &bind_group.0, &[settings_index.index()]);
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
-    }
-    encoder.pop_debug_group();
-    time_span.end(ctx.command_encoder());
+    let step = ComputeStep {
+        label: "dynamic_ao_compose",
+        pipeline: compute_pipeline,
+        bind_group: &bind_group.0,
+        offsets: &[settings_index.index()],
+        texels: size,
+    };
+    record_passes(&mut ctx, "dynamic_ao_compose", true, &[step]);
 }
 
 pub(crate) fn debug_view_pass(

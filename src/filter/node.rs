@@ -3,14 +3,14 @@
 use bevy::ecs::prelude::*;
 use bevy::render::{
     camera::ExtractedCamera,
-    diagnostic::RecordDiagnostics,
     extract_component::DynamicUniformIndex,
-    render_resource::{ComputePassDescriptor, PipelineCache},
+    render_resource::PipelineCache,
     renderer::{RenderContext, ViewQuery},
     view::ViewUniformOffset,
 };
 
 use super::pipeline::{BlurBindGroups, BlurPipelines, UpsampleBindGroup};
+use crate::dispatch::{ComputeStep, record_passes};
 use crate::view::DynamicAoUniform;
 
 pub(crate) fn blur_pass(
@@ -32,25 +32,19 @@ pub(crate) fn blur_pass(
     ) else {
         return;
     };
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_blur");
-    let encoder = ctx.command_encoder();
-    encoder.push_debug_group("dynamic_ao_blur");
-    for (label, pipeline, bind_group) in [
+    let offsets = [view_offset.offset, settings_index.index()];
+    let steps = [
         ("dynamic_ao_blur_x", x, &bind_groups.x),
         ("dynamic_ao_blur_y", y, &bind_groups.y),
-    ] {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[view_offset.offset, settings_index.index()]);
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
-    }
-    encoder.pop_debug_group();
-    time_span.end(ctx.command_encoder());
+    ]
+    .map(|(label, pipeline, bind_group)| ComputeStep {
+        label,
+        pipeline,
+        bind_group,
+        offsets: &offsets,
+        texels: size,
+    });
+    record_passes(&mut ctx, "dynamic_ao_blur", true, &steps);
 }
 
 pub(crate) fn upsample_pass(
@@ -71,24 +65,12 @@ pub(crate) fn upsample_pass(
     ) else {
         return;
     };
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_upsample");
-    let encoder = ctx.command_encoder();
-    encoder.push_debug_group("dynamic_ao_upsample");
-    {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some("dynamic_ao_upsample"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(
-            0,
-            &bind_group.0,
-            &[view_offset.offset, settings_index.index()],
-        );
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
-    }
-    encoder.pop_debug_group();
-    time_span.end(ctx.command_encoder());
+    let step = ComputeStep {
+        label: "dynamic_ao_upsample",
+        pipeline,
+        bind_group: &bind_group.0,
+        offsets: &[view_offset.offset, settings_index.index()],
+        texels: size,
+    };
+    record_passes(&mut ctx, "dynamic_ao_upsample", true, &[step]);
 }

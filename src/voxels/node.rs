@@ -12,6 +12,7 @@ use bevy::render::{
 };
 
 use super::render::{VoxelBindGroups, VoxelBuffers, VoxelPipelines};
+use crate::dispatch::{ComputeStep, record_passes};
 use crate::filter::BlurPipelines;
 use crate::view::DynamicAoUniform;
 
@@ -76,42 +77,32 @@ pub(crate) fn voxel_pass(
         buffers.needs_voxelizing = false;
     }
 
-    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxel_ao");
     // No debug groups in this file: lavapipe crashes recording one after the grid's buffer
     // clear (the passes keep their labels).
-    let encoder = ctx.command_encoder();
-    let half = (size + 1) / 2;
-    {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some("dynamic_ao_voxel_ao"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(sample);
-        pass.set_bind_group(
-            0,
-            &bind_groups.sample,
-            &[view_offset.offset, settings_index.index()],
-        );
-        pass.dispatch_workgroups(half.x.div_ceil(8), half.y.div_ceil(8), 1);
-    }
-    time_span.end(ctx.command_encoder());
+    let offsets = [view_offset.offset, settings_index.index()];
+    let sample_step = ComputeStep {
+        label: "dynamic_ao_voxel_ao",
+        pipeline: sample,
+        bind_group: &bind_groups.sample,
+        offsets: &offsets,
+        texels: (size + 1) / 2,
+    };
+    record_passes(&mut ctx, "dynamic_ao_voxel_ao", false, &[sample_step]);
 
-    let time_span = diagnostics.time_span(ctx.command_encoder(), "dynamic_ao_voxel_filter");
-    let encoder = ctx.command_encoder();
-    let dynamic = [view_offset.offset, settings_index.index()];
     let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
     if let Some((x, y)) = &bind_groups.blur {
         passes.push(("dynamic_ao_voxel_blur_x", blur_x, x));
         passes.push(("dynamic_ao_voxel_blur_y", blur_y, y));
     }
-    for (label, pipeline, bind_group) in passes {
-        let mut pass = encoder.begin_compute_pass(&ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &dynamic);
-        pass.dispatch_workgroups(size.x.div_ceil(8), size.y.div_ceil(8), 1);
-    }
-    time_span.end(ctx.command_encoder());
+    let steps: Vec<ComputeStep> = passes
+        .into_iter()
+        .map(|(label, pipeline, bind_group)| ComputeStep {
+            label,
+            pipeline,
+            bind_group,
+            offsets: &offsets,
+            texels: size,
+        })
+        .collect();
+    record_passes(&mut ctx, "dynamic_ao_voxel_filter", false, &steps);
 }
