@@ -48,6 +48,7 @@ impl Plugin for FilterPlugin {
             )
             .add_systems(
                 Core3d,
+                // At half resolution the blur runs on the upsampled, full-resolution AO.
                 (node::upsample_pass, node::blur_pass)
                     .chain()
                     .in_set(DynamicAoSystems::Filter),

@@ -42,6 +42,7 @@ impl Plugin for NdBufferPlugin {
             .add_render_command::<BackFace3d, phase::DrawBackFaces>()
             .add_systems(
                 RenderStartup,
+                // The back-face pipeline is built on Bevy's mesh pipeline and its layouts.
                 pipeline::init_back_face_pipeline.after(MeshPipelineSystems),
             )
             .add_systems(ExtractSchedule, phase::extract_back_face_phases)

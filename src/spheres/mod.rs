@@ -101,6 +101,7 @@ impl Plugin for SphereOccluderPlugin {
         #[cfg(feature = "gizmos")]
         app.init_resource::<ShowOccluderSpheres>()
             .register_type::<ShowOccluderSpheres>()
+            // Draws the proxies of this frame's pose.
             .add_systems(PostUpdate, gizmos::draw_spheres.after(RefitSpheres));
 
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {

@@ -115,6 +115,8 @@ impl Plugin for VoxelAoPlugin {
                     render::prepare_voxel_bind_groups.in_set(RenderSystems::PrepareBindGroups),
                     show::prepare_show_voxels
                         .in_set(RenderSystems::PrepareBindGroups)
+                        // Both use `VoxelBuffers`, which the other one writes (its voxelize bind
+                        // group): a fixed order instead of whichever the executor picks.
                         .after(render::prepare_voxel_bind_groups),
                 ),
             )
