@@ -29,9 +29,10 @@ mod scenes;
 use std::path::PathBuf;
 
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh, ground_truth::point_occlusion, metrics::rmse, png16::write_visibility_png,
+    ground_truth::point_occlusion, metrics::rmse, png16::write_visibility_png,
 };
 use far_scenes::{FarRun, FarScene};
 use far_terms::FarTerm;
@@ -97,7 +98,7 @@ fn proxy_report(gpu: &mut harness::Gpu) {
     let floor = far_scenes::floor_points_around(&model, &bvh);
     // The proxies themselves as triangles: what they block together, without the product's
     // double counting.
-    let mut box_scene = bevy_dynamic_ao::reference::scene::TriangleScene::default();
+    let mut box_scene = bevy_dynamic_ao::geometry::triangles::TriangleScene::default();
     for proxy in &proxies {
         let m = bevy::math::Affine3A::from_mat3_translation(proxy.axes * 2.0, proxy.center);
         if m.matrix3.determinant().abs() > 1e-12 {

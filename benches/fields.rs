@@ -6,7 +6,7 @@
 use bevy::math::Affine3A;
 use bevy::prelude::*;
 use bevy_dynamic_ao::fields::{BakeSettings, bake};
-use bevy_dynamic_ao::reference::scene::TriangleScene;
+use bevy_dynamic_ao::geometry::triangles::TriangleScene;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn benches(c: &mut Criterion) {

@@ -3,12 +3,11 @@
 
 use bevy::math::{Affine3A, Mat4, Vec3};
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh,
     ground_truth::{GroundTruthSettings, camera_ray, ground_truth_visibility},
     nd_buffer::{NdBuffer, NdTexel, ViewMatrices},
     near_field::{NearFieldInputs, near_field_occlusion},
-    scene::TriangleScene,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 

@@ -6,10 +6,13 @@
 
 use bevy::math::{Affine3A, Quat, Vec3};
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::{
+    deform::Pose,
+    rest_mesh::{RestMesh, VertexSkin},
+};
 use bevy_dynamic_ao::spheres::{
     lloyd::{ClusteredMesh, cluster},
-    refit::{Pose, refit},
-    rest_mesh::{RestMesh, VertexSkin},
+    refit::refit,
 };
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 

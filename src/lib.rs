@@ -44,6 +44,7 @@ pub mod compose;
 mod dispatch;
 pub mod fields;
 pub mod filter;
+pub mod geometry;
 pub mod horizon;
 mod image_space;
 pub mod nd_buffer;

@@ -28,7 +28,7 @@ use bevy::gltf::{Gltf, GltfMesh};
 use bevy::math::Affine3A;
 use bevy::prelude::*;
 use bevy_dynamic_ao::fields::{BakeSettings, FieldReach, bake};
-use bevy_dynamic_ao::reference::scene::TriangleScene;
+use bevy_dynamic_ao::geometry::triangles::TriangleScene;
 use bevy_dynamic_ao::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
 const USAGE: &str = "usage: ao_bake --scene FILE.glb --out-dir DIR [--resolution N] \

@@ -15,8 +15,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use bevy::math::{UVec3, Vec3};
 
 use super::format::{AoFieldData, MAX_RESOLUTION};
-use crate::reference::bvh::Bvh;
-use crate::reference::scene::{Triangle, triangle_bounds};
+use crate::geometry::bvh::Bvh;
+use crate::geometry::triangles::{Triangle, triangle_bounds};
 use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
 /// How far a field's occlusion reaches, which also sets its grid's extent.
@@ -425,7 +425,7 @@ mod tests {
     use bevy::prelude::*;
 
     use super::*;
-    use crate::reference::scene::TriangleScene;
+    use crate::geometry::triangles::TriangleScene;
 
     fn cube() -> Vec<Triangle> {
         let mut scene = TriangleScene::default();
@@ -439,7 +439,7 @@ mod tests {
         let mut blocked = 0;
         let mut state = 12345u32;
         let mut next = || {
-            state = crate::reference::sampling::pcg_hash(state);
+            state = crate::geometry::hash::pcg_hash(state);
             state as f32 / u32::MAX as f32
         };
         for _ in 0..rays {

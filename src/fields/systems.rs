@@ -17,11 +17,11 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use super::baker::{BakeSettings, FieldReach, bake};
 use super::component::{AoField, AoFieldCache};
 use super::format::AoFieldData;
-use crate::reference::scene::{Triangle, TriangleScene};
+use crate::geometry::deform::{Deformer, Pose};
+use crate::geometry::deform::{mesh_morph_weights, skin_joints};
+use crate::geometry::rest_mesh::RestMesh;
+use crate::geometry::triangles::{Triangle, TriangleScene};
 use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS, DynamicAo};
-use crate::spheres::refit::{Deformer, Pose};
-use crate::spheres::rest_mesh::RestMesh;
-use crate::spheres::{mesh_morph_weights, skin_joints};
 
 /// The field an [`AoField`] occluder casts from, added by the plugin once that field exists
 /// (loaded, or baked on load). Until then the occluder casts nothing.

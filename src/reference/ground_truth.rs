@@ -4,9 +4,9 @@
 
 use bevy::math::{Vec3, Vec4, Vec4Swizzles};
 
-use super::bvh::Bvh;
 use super::nd_buffer::ViewMatrices;
 use super::sampling::pcg_hash;
+use crate::geometry::bvh::Bvh;
 
 /// How to trace a ground-truth image.
 #[derive(Clone, Copy, Debug)]

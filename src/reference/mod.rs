@@ -9,14 +9,13 @@
 //! - [`fields`]: AO field occlusion exactly as `fields/fields.wgsl` evaluates it.
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
-//! - [`scene`] and [`bvh`]: triangles of Bevy meshes in world space, and a BVH over them.
+//! - [`crate::geometry`] holds the triangles, BVH and hash these share with the plugin.
 //! - [`posed`]: the triangles a Bevy world draws this frame, skinned and morphed meshes posed.
 //! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
 //!   binary hits within a distance R, 1 = open (eq. 1 of the papers).
 //! - [`metrics`]: RMSE and mean bias between two AO images.
 //! - [`png16`]: 16-bit grayscale PNG files of visibility.
 
-pub mod bvh;
 pub mod cap;
 pub mod fields;
 pub mod filter;
@@ -27,8 +26,9 @@ pub mod nd_buffer;
 pub mod near_field;
 pub mod png16;
 pub mod posed;
+#[cfg(test)]
+mod proxy_cast;
 pub mod ray_march;
 pub mod sampling;
-pub mod scene;
 pub mod spheres;
 pub mod voxels;

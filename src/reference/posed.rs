@@ -11,10 +11,10 @@ use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::mesh::{Mesh, Mesh3d};
 use bevy::prelude::{Assets, GlobalTransform};
 
-use super::scene::{Triangle, TriangleScene};
-use crate::spheres::refit::{Deformer, Pose};
-use crate::spheres::rest_mesh::RestMesh;
-use crate::spheres::{mesh_morph_weights, skin_joints};
+use crate::geometry::deform::{Deformer, Pose};
+use crate::geometry::deform::{mesh_morph_weights, skin_joints};
+use crate::geometry::rest_mesh::RestMesh;
+use crate::geometry::triangles::{Triangle, TriangleScene};
 
 type Meshes<'w, 's> = Query<
     'w,

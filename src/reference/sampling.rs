@@ -2,18 +2,10 @@
 
 use bevy::math::{Mat3, Vec2, Vec3};
 
+pub use crate::geometry::hash::{HASH_TO_UNIT, pcg_hash};
+
 const GOLDEN_ANGLE: f32 = 2.399_963_2;
 const HASH_TO_ANGLE: f32 = 1.462_918_1e-9;
-/// 1 / 2³²: maps a 32-bit hash into [0, 1).
-pub const HASH_TO_UNIT: f32 = 2.328_306_4e-10;
-
-/// PCG hash (Jarzynski & Olano 2020).
-pub fn pcg_hash(v: u32) -> u32 {
-    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
-    (word >> 22) ^ word
-}
-
 /// Per-pixel rotation of the sample pattern, radians in [0, 2π).
 pub fn pixel_rotation(x: u32, y: u32) -> f32 {
     pcg_hash(x ^ pcg_hash(y)) as f32 * HASH_TO_ANGLE

@@ -319,13 +319,15 @@ pub fn box_proxy(center: Vec3, axes: Mat3) -> OccluderSphere {
 
 #[cfg(test)]
 mod tests {
+    use crate::reference::near_field::sphere_occlusion;
+    use crate::spheres::far_field_reach;
     use bevy::math::Affine3A;
     use bevy::prelude::*;
 
     use super::*;
-    use crate::reference::bvh::Bvh;
+    use crate::geometry::bvh::Bvh;
+    use crate::geometry::triangles::TriangleScene;
     use crate::reference::ground_truth::point_occlusion;
-    use crate::reference::scene::TriangleScene;
 
     /// Cosine-weighted share of rays from `p` that hit `bvh` within `reach`.
     fn traced(bvh: &Bvh, p: Vec3, n: Vec3, reach: f32) -> f32 {
@@ -404,5 +406,20 @@ mod tests {
         let within = proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 1.8);
         assert!(within > 0.0 && within < full);
         assert_eq!(proxy_occlusion(&proxy, Vec3::ZERO, Vec3::Y, 2.0), full);
+    }
+
+    /// Eq. 5: a sphere blocks exactly ε of a receiver that faces it at d_far.
+    #[test]
+    fn occlusion_at_reach_is_epsilon() {
+        for epsilon in [0.005, 0.02, 0.1] {
+            let reach = far_field_reach(0.3, epsilon);
+            // Facing the sphere, at exactly d_far.
+            let a = sphere_occlusion(Vec3::new(0.0, reach, 0.0), 0.3, Vec3::ZERO, Vec3::Y);
+            assert!((a - epsilon).abs() < 1e-4, "ε {epsilon}: {a}");
+            let beyond =
+                sphere_occlusion(Vec3::new(0.0, reach * 1.1, 0.0), 0.3, Vec3::ZERO, Vec3::Y);
+            assert!(beyond < epsilon);
+        }
+        assert!((far_field_reach(1.0, 0.01) - 10.01).abs() < 0.01);
     }
 }

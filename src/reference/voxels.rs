@@ -3,12 +3,11 @@
 //! hashes, so the GPU passes can be checked against them.
 
 use bevy::math::{Affine3A, Vec2, Vec3};
-use bevy::platform::collections::HashMap;
 
 use super::filter::wendland;
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::{pcg_hash, tangent_frame};
-use super::scene::Triangle;
+use crate::geometry::triangles::Triangle;
 use crate::voxels::{VoxelFalloff, VoxelMarch, VoxelRays};
 
 /// A bit grid of `resolution`³ cells; cell (x, y, z) is bit `i % 32` of word `i / 32`,
@@ -97,28 +96,6 @@ impl VoxelGrid {
             }
         }
     }
-}
-
-/// Whether a triangle soup encloses a volume: every edge, with vertices at the same position
-/// welded (meshes split vertices along hard edges and seams), belongs to exactly two triangles.
-pub fn is_closed(triangles: impl IntoIterator<Item = [Vec3; 3]>) -> bool {
-    let mut welded: HashMap<[u32; 3], u32> = HashMap::default();
-    let mut id = |p: Vec3| {
-        let next = welded.len() as u32;
-        *welded.entry(p.to_array().map(f32::to_bits)).or_insert(next)
-    };
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::default();
-    for triangle in triangles {
-        let ids = triangle.map(&mut id);
-        for k in 0..3 {
-            let (a, b) = (ids[k], ids[(k + 1) % 3]);
-            if a == b {
-                return false;
-            }
-            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    !edges.is_empty() && edges.values().all(|&count| count == 2)
 }
 
 /// The value of the 2D edge function of (a, b) at p, computed from the lexicographically smaller
@@ -445,6 +422,7 @@ pub fn voxel_ao_map(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::closed::is_closed;
 
     fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
         Triangle {
@@ -575,7 +553,7 @@ mod tests {
     }
 
     fn cube(center: Vec3, half: f32) -> Vec<Triangle> {
-        let mut scene = crate::reference::scene::TriangleScene::default();
+        let mut scene = crate::geometry::triangles::TriangleScene::default();
         scene.add_mesh(
             &bevy::math::primitives::Cuboid::from_length(half * 2.0).into(),
             Affine3A::from_translation(center),

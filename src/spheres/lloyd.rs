@@ -10,10 +10,10 @@
 
 use bevy::math::{Mat3, Vec3};
 
-use super::rest_mesh::RestMesh;
-use crate::reference::bvh::Bvh;
-use crate::reference::sampling::pcg_hash;
-use crate::reference::scene::Triangle;
+use crate::geometry::bvh::Bvh;
+use crate::geometry::hash::pcg_hash;
+use crate::geometry::rest_mesh::RestMesh;
+use crate::geometry::triangles::Triangle;
 
 /// Most Lloyd iterations; clustering usually settles well before.
 const MAX_ITERATIONS: usize = 32;

@@ -52,7 +52,7 @@ mod gizmos;
 pub mod lloyd;
 mod node;
 pub mod refit;
-pub mod rest_mesh;
+
 mod splat;
 mod systems;
 
@@ -69,7 +69,6 @@ pub use component::{
 #[cfg(feature = "gizmos")]
 pub use gizmos::ShowOccluderSpheres;
 pub use systems::ASYNC_CLUSTERING_VERTICES;
-pub(crate) use systems::{mesh_morph_weights, skin_joints};
 
 pub(crate) use splat::SplatPipeline;
 

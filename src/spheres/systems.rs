@@ -18,8 +18,9 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use super::component::{OccluderSpheres, ProxyShape, SphereOccluder};
 use super::fit::fit_boxes;
 use super::lloyd::{ClusteredMesh, cluster};
-use super::refit::{Pose, refit};
-use super::rest_mesh::{RestMesh, SphereMeshError};
+use super::refit::refit;
+use crate::geometry::deform::{Pose, mesh_morph_weights, skin_joints};
+use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
 
 /// Meshes with more vertices than this are clustered on the async compute pool, so loading a
 /// large character never stalls a frame; smaller ones are clustered at once.
@@ -33,7 +34,7 @@ pub(crate) struct FittedMesh {
     pub clusterable_vertices: usize,
 }
 
-type FitResult = Result<Arc<FittedMesh>, SphereMeshError>;
+type FitResult = Result<Arc<FittedMesh>, RestMeshError>;
 
 type FitKey = (AssetId<Mesh>, u32, ProxyShape);
 
@@ -255,42 +256,5 @@ pub(crate) fn refit_spheres(
                 commands.entity(entity).insert(out);
             }
         }
-    }
-}
-
-/// Fills `out` with the skinning matrices of `skinned` (each joint's world transform × its
-/// inverse bind pose), as Bevy's skinning uses them. Returns false when a joint entity is
-/// missing (it counts as the identity). Leaves `out` empty while the bind poses are loading.
-pub(crate) fn skin_joints(
-    skinned: &SkinnedMesh,
-    inverse_bindposes: &Assets<SkinnedMeshInverseBindposes>,
-    transforms: &Query<&GlobalTransform>,
-    out: &mut Vec<Affine3A>,
-) -> bool {
-    out.clear();
-    let Some(bindposes) = inverse_bindposes.get(&skinned.inverse_bindposes) else {
-        return true;
-    };
-    let mut all_found = true;
-    for (i, joint) in skinned.joints.iter().enumerate() {
-        let world = transforms.get(*joint).map(|t| t.affine());
-        all_found &= world.is_ok();
-        let bindpose = bindposes.get(i).copied().unwrap_or_default();
-        out.push(world.unwrap_or_default() * Affine3A::from_mat4(bindpose));
-    }
-    all_found
-}
-
-/// The morph target weights a mesh is drawn with this frame.
-pub(crate) fn mesh_morph_weights<'a>(
-    morphs: Option<&'a MeshMorphWeights>,
-    owners: &'a Query<&MorphWeights>,
-) -> &'a [f32] {
-    match morphs {
-        Some(MeshMorphWeights::Value { weights }) => weights,
-        Some(MeshMorphWeights::Reference(owner)) => {
-            owners.get(*owner).map(|w| w.weights()).unwrap_or_default()
-        }
-        None => &[],
     }
 }

@@ -25,10 +25,10 @@ use super::component::{
     NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo, VoxelRays,
     grid_words,
 };
-use crate::reference::voxels::is_closed;
-use crate::spheres::refit::{Deformer, Pose};
-use crate::spheres::rest_mesh::{RestMesh, SphereMeshError};
-use crate::spheres::{mesh_morph_weights, skin_joints};
+use crate::geometry::closed::is_closed;
+use crate::geometry::deform::{Deformer, Pose};
+use crate::geometry::deform::{mesh_morph_weights, skin_joints};
+use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
 
 /// One triangle in the grid space of one volume; `a[3]` holds the volume's index (as bits).
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -171,7 +171,7 @@ impl VoxelMesh {
 /// Meshes copied out of their assets once.
 #[derive(Resource, Default)]
 pub(crate) struct VoxelMeshCache {
-    meshes: HashMap<AssetId<Mesh>, Result<Arc<VoxelMesh>, SphereMeshError>>,
+    meshes: HashMap<AssetId<Mesh>, Result<Arc<VoxelMesh>, RestMeshError>>,
 }
 
 pub(crate) fn forget_changed_meshes(

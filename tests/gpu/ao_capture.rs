@@ -7,13 +7,12 @@ use bevy::asset::RenderAssetUsages;
 use bevy::camera::{CameraProjection, PerspectiveProjection};
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh,
     ground_truth::{GroundTruthSettings, ground_truth_visibility},
     metrics::rmse,
     nd_buffer::ViewMatrices,
     png16::read_visibility_png,
-    scene::TriangleScene,
 };
 
 use crate::examples::example_binary;

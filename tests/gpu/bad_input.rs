@@ -106,7 +106,7 @@ fn mesh_without_normals_and_nan_transform_do_not_break_the_frame() {
     assert!(frame.visibility.iter().any(|v| *v < 0.7), "AO vanished");
     assert!(mean_luminance(&gpu.color(1)) > 0.02, "the image is black");
     // The CPU side drops what cannot be traced and says how much.
-    let mut triangles = bevy_dynamic_ao::reference::scene::TriangleScene::default();
+    let mut triangles = bevy_dynamic_ao::geometry::triangles::TriangleScene::default();
     for (mesh, transform) in &scene.meshes {
         triangles.add_mesh(mesh, transform.compute_affine());
     }

@@ -5,9 +5,9 @@
 //! on more scenes, third-party models among them.
 
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh,
     ground_truth::{camera_ray, point_occlusion},
     metrics::rmse,
 };

@@ -6,11 +6,10 @@
 
 use bevy::prelude::*;
 use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
+use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh,
     posed::{posed_triangles, posed_triangles_of},
-    scene::TriangleScene,
     spheres::{proxy_occlusion, sphere_union},
 };
 use bevy_dynamic_ao::spheres::OccluderSphere;

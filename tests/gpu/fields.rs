@@ -8,8 +8,9 @@ use bevy::math::Affine3A;
 use bevy::prelude::*;
 use bevy_dynamic_ao::FieldShading;
 use bevy_dynamic_ao::fields::{AoFieldCache, AoFieldData, BakeSettings, bake};
+use bevy_dynamic_ao::geometry::triangles::TriangleScene;
 use bevy_dynamic_ao::prelude::*;
-use bevy_dynamic_ao::reference::{fields::field_occlusion, scene::TriangleScene};
+use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
 use crate::harness::{GPU_TURN, Gpu, difference_stats};

@@ -12,12 +12,11 @@ use bevy::render::{
     render_resource::TextureFormat,
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
+use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
-    bvh::Bvh,
     ground_truth::{GroundTruthSettings, ground_truth_visibility},
     nd_buffer::{NdBuffer, NdTexel, ViewMatrices},
-    scene::TriangleScene,
 };
 
 use crate::common;

@@ -11,12 +11,15 @@ use bevy::mesh::skinning::SkinnedMesh;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::storage::ShaderBuffer;
+use bevy_dynamic_ao::geometry::{
+    closed::is_closed,
+    triangles::{Triangle, TriangleScene},
+};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     filter::{cross_bilateral_blur, joint_bilateral_upsample_pair},
     metrics::rmse,
-    scene::{Triangle, TriangleScene},
-    voxels::{VoxelCamera, VoxelGrid, is_closed, voxel_ao_map, voxelize},
+    voxels::{VoxelCamera, VoxelGrid, voxel_ao_map, voxelize},
 };
 use bevy_dynamic_ao::voxels::{VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelMarch};
 

@@ -3,7 +3,7 @@
 
 use bevy::math::Vec3;
 
-use super::scene::Triangle;
+use super::triangles::Triangle;
 
 /// A ray hit: distance along the ray and the triangle index.
 #[derive(Clone, Copy, Debug)]

@@ -5,7 +5,7 @@ use bevy::mesh::{Mesh, PrimitiveTopology, VertexAttributeValues};
 
 /// Why a mesh cannot carry spheres.
 #[derive(Clone, Debug, PartialEq)]
-pub enum SphereMeshError {
+pub enum RestMeshError {
     /// Only triangle lists are clustered.
     NotTriangles(PrimitiveTopology),
     /// The mesh has no `Float32x3` positions.
@@ -17,7 +17,7 @@ pub enum SphereMeshError {
     NotInMainWorld,
 }
 
-impl std::fmt::Display for SphereMeshError {
+impl std::fmt::Display for RestMeshError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::NotTriangles(topology) => {
@@ -37,7 +37,7 @@ impl std::fmt::Display for SphereMeshError {
     }
 }
 
-impl std::error::Error for SphereMeshError {}
+impl std::error::Error for RestMeshError {}
 
 /// Skin data of one vertex: four joint indices (into `SkinnedMesh::joints`) and their weights.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -70,19 +70,19 @@ pub struct RestMesh {
 
 impl RestMesh {
     /// Copies what sphere fitting needs out of `mesh`.
-    pub fn from_mesh(mesh: &Mesh) -> Result<Self, SphereMeshError> {
+    pub fn from_mesh(mesh: &Mesh) -> Result<Self, RestMeshError> {
         let topology = mesh.primitive_topology();
         if topology != PrimitiveTopology::TriangleList {
-            return Err(SphereMeshError::NotTriangles(topology));
+            return Err(RestMeshError::NotTriangles(topology));
         }
         let positions = match mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION) {
-            Err(_) => return Err(SphereMeshError::NotInMainWorld),
+            Err(_) => return Err(RestMeshError::NotInMainWorld),
             Ok(Some(VertexAttributeValues::Float32x3(p))) => p,
-            Ok(_) => return Err(SphereMeshError::NoPositions),
+            Ok(_) => return Err(RestMeshError::NoPositions),
         };
         let positions: Vec<Vec3> = positions.iter().map(|&p| Vec3::from(p)).collect();
         let indices: Vec<usize> = match mesh.try_indices_option() {
-            Err(_) => return Err(SphereMeshError::NotInMainWorld),
+            Err(_) => return Err(RestMeshError::NotInMainWorld),
             Ok(Some(indices)) => indices.iter().collect(),
             Ok(None) => (0..positions.len()).collect(),
         };
@@ -115,7 +115,7 @@ impl RestMesh {
         skin: Option<Vec<VertexSkin>>,
         morph_positions: Vec<Vec3>,
         morph_targets: usize,
-    ) -> Result<Self, SphereMeshError> {
+    ) -> Result<Self, RestMeshError> {
         let count = positions.len();
         let mut areas = vec![0.0; count];
         let mut face_normals = vec![Vec3::ZERO; count];
@@ -137,7 +137,7 @@ impl RestMesh {
             triangles.push([tri[0] as u32, tri[1] as u32, tri[2] as u32]);
         }
         if triangles.is_empty() {
-            return Err(SphereMeshError::NoTriangles);
+            return Err(RestMeshError::NoTriangles);
         }
         let normals = normals
             .filter(|n| n.len() == count)

@@ -1,0 +1,18 @@
+//! Geometry every technique and the CPU reference share, with no rendering in it: a mesh's
+//! rest-pose data and its deformation into world space, world-space triangles, a BVH over them,
+//! closedness, and the integer hash behind every pseudo-random pattern.
+//!
+//! - [`rest_mesh`]: positions, normals, skin and morph targets copied out of a Bevy mesh once.
+//! - [`deform`]: the mesh in one pose (morph targets, then linear blend skinning), and the pose
+//!   a Bevy world draws it in this frame.
+//! - [`triangles`]: world-space triangles of Bevy meshes.
+//! - [`bvh`]: a bounding volume hierarchy over triangles, for rays and nearest points.
+//! - [`closed`]: whether a triangle soup encloses a volume.
+//! - [`hash`]: the PCG hash, bit-identical on the CPU and in WGSL.
+
+pub mod bvh;
+pub mod closed;
+pub mod deform;
+pub mod hash;
+pub mod rest_mesh;
+pub mod triangles;

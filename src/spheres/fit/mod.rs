@@ -1,0 +1,187 @@
+//! Fitting a mesh with a few oriented boxes that fill its shape, the default far-field proxies.
+//!
+//! Shanmugam & Arikan's spheres sit inside the surface (§5), so a set of them fills only part of
+//! a box, and none fits a floor or a wall, which enclose no volume. The occlusion an object casts
+//! at a distance is set by the solid angle it covers, so the proxies here cover the object's
+//! solid instead:
+//!
+//! 1. The mesh is voxelized (40 cells along its longest side) from dense samples of its
+//!    triangles; cells the outside cannot reach through empty cells are its interior (a mesh with
+//!    holes larger than a cell gets a shell, which still projects like the solid).
+//! 2. Top-down splitting: starting from one cluster of every sample (surface points and interior
+//!    cell centres), the cluster whose box fills its own silhouette worst is cut in two (2-means
+//!    along its longest axis) until every box fills its silhouette to 3/4 or `count` boxes exist.
+//!    A box-shaped mesh stays one box, a floor or a wall one flat box; an L-shape becomes two.
+//! 3. Each box is the cluster's principal-axis bounding box, shrunk per axis so that its
+//!    silhouette along each axis has the area the cluster's own silhouette has: a ball's box
+//!    covers the ball's disk face-on.
+//!
+//! Few boxes matter: proxies are splatted independently, so proxies one behind the other both
+//! count (multiplied as independent occluders), which overstates what they block together.
+
+mod cluster;
+mod frame;
+mod samples;
+#[cfg(test)]
+mod tests;
+
+use bevy::math::{Mat3, Vec3};
+
+use super::lloyd::{ClusteredMesh, RestSphere, sphere_joints};
+use crate::geometry::rest_mesh::RestMesh;
+use cluster::Cluster;
+use samples::{Sample, cell_size, solid_samples};
+
+/// Voxels along the longest side of the mesh's bounds.
+const CELLS: f32 = 40.0;
+/// Silhouette fill below which a cluster is split.
+const GOOD_FILL: f32 = 0.75;
+/// Cells of the occupancy grid a silhouette is measured on, per side at most.
+const SILHOUETTE_CELLS: usize = 24;
+/// 2-means iterations per split.
+const SPLIT_ITERATIONS: usize = 8;
+
+/// Fits at most `count` boxes to `mesh` and groups its vertices by box, for the per-frame refit.
+pub fn fit_boxes(mesh: &RestMesh, count: u32) -> ClusteredMesh {
+    let samples = solid_samples(mesh);
+    if samples.is_empty() || count == 0 {
+        return ClusteredMesh::default();
+    }
+    let cell = cell_size(mesh);
+    let mut clusters = if mesh.skin.is_some() {
+        joint_clusters(samples, count as usize, cell)
+    } else {
+        vec![Cluster::new(samples, cell)]
+    };
+    while clusters.len() < count as usize {
+        let worst = clusters
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !c.settled && c.fill.min_element() < GOOD_FILL)
+            .max_by(|(_, a), (_, b)| a.split_priority().total_cmp(&b.split_priority()))
+            .map(|(i, _)| i);
+        let Some(worst) = worst else {
+            break;
+        };
+        let cluster = clusters.swap_remove(worst);
+        match cluster.split(cell) {
+            Ok((a, b)) => clusters.extend([a, b]),
+            Err(mut cluster) => {
+                cluster.settled = true;
+                clusters.push(cluster);
+            }
+        }
+    }
+    // Deterministic order: by centre, x then y then z.
+    clusters.sort_by(|a, b| {
+        a.center
+            .to_array()
+            .partial_cmp(&b.center.to_array())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    let boxes: Vec<(Vec3, Mat3)> = clusters.iter().map(|c| c.proxy_box(cell)).collect();
+    group_vertices(mesh, &boxes)
+}
+
+/// A skinned mesh starts from one cluster per joint (by the joint that moves each sample most),
+/// the lightest merged into the one with the nearest centre until at most `count` remain.
+fn joint_clusters(samples: Vec<Sample>, count: usize, cell: f32) -> Vec<Cluster> {
+    let mut groups: Vec<(u16, Vec<Sample>)> = Vec::new();
+    for s in samples {
+        match groups.iter_mut().find(|(j, _)| *j == s.joint) {
+            Some((_, group)) => group.push(s),
+            None => groups.push((s.joint, vec![s])),
+        }
+    }
+    groups.sort_by_key(|(j, _)| *j);
+    let mut groups: Vec<Vec<Sample>> = groups.into_iter().map(|(_, g)| g).collect();
+    let weight = |g: &[Sample]| g.iter().map(|s| s.weight).sum::<f32>();
+    let centre = |g: &[Sample]| {
+        g.iter().fold(Vec3::ZERO, |m, s| m + s.position * s.weight) / weight(g).max(1e-30)
+    };
+    let total: f32 = groups.iter().map(|g| weight(g)).sum();
+    loop {
+        let lightest = (0..groups.len())
+            .min_by(|&a, &b| weight(&groups[a]).total_cmp(&weight(&groups[b])))
+            .expect("at least one group");
+        // Joints that move only a sliver of the surface do not get a box of their own.
+        let sliver = weight(&groups[lightest]) < 0.01 * total;
+        if groups.len() <= 1 || (groups.len() <= count.max(1) && !sliver) {
+            break;
+        }
+        let merged = groups.swap_remove(lightest);
+        let at = centre(&merged);
+        let nearest = (0..groups.len())
+            .min_by(|&a, &b| {
+                centre(&groups[a])
+                    .distance_squared(at)
+                    .total_cmp(&centre(&groups[b]).distance_squared(at))
+            })
+            .expect("another group");
+        groups[nearest].extend(merged);
+    }
+    groups.into_iter().map(|g| Cluster::new(g, cell)).collect()
+}
+
+/// Every vertex joins the box nearest to it (0 inside); each box's refit data comes from its
+/// vertices.
+fn group_vertices(mesh: &RestMesh, boxes: &[(Vec3, Mat3)]) -> ClusteredMesh {
+    let outside = |p: Vec3, (center, axes): &(Vec3, Mat3)| {
+        let d = p - *center;
+        let mut excess = Vec3::ZERO;
+        for i in 0..3 {
+            let axis = axes.col(i);
+            let half = axis.length();
+            let along = if half > 0.0 { d.dot(axis / half) } else { 0.0 };
+            excess[i] = (along.abs() - half).max(0.0);
+        }
+        excess.length_squared()
+    };
+    let mut members = vec![Vec::new(); boxes.len()];
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if !p.is_finite() {
+            continue;
+        }
+        let nearest = (0..boxes.len())
+            .min_by(|&a, &b| outside(*p, &boxes[a]).total_cmp(&outside(*p, &boxes[b])))
+            .unwrap_or(0);
+        members[nearest].push(v as u32);
+    }
+    let mut clustered = ClusteredMesh {
+        shape: super::ProxyShape::Boxes,
+        ..ClusteredMesh::default()
+    };
+    for ((center, axes), members) in boxes.iter().zip(members) {
+        if members.is_empty() {
+            continue;
+        }
+        // Vertices without area (unused, or of degenerate triangles) still move with the box.
+        let weight = |v: u32| mesh.areas[v as usize].max(1e-12);
+        let area: f32 = members.iter().map(|&v| weight(v)).sum();
+        let centroid = members
+            .iter()
+            .map(|&v| mesh.positions[v as usize] * weight(v))
+            .sum::<Vec3>()
+            / area;
+        let spread = (members
+            .iter()
+            .map(|&v| weight(v) * mesh.positions[v as usize].distance_squared(centroid))
+            .sum::<f32>()
+            / area)
+            .sqrt();
+        let start = clustered.order.len() as u32;
+        clustered.order.extend_from_slice(&members);
+        clustered.ranges.push((start, clustered.order.len() as u32));
+        clustered.sphere_joints.push(sphere_joints(mesh, &members));
+        clustered.spheres.push(RestSphere {
+            center: *center,
+            radius: (axes.x_axis + axes.y_axis + axes.z_axis)
+                .length()
+                .max(axes.x_axis.length()),
+            axes: *axes,
+            centroid,
+            spread,
+        });
+    }
+    clustered
+}

@@ -1,0 +1,98 @@
+use bevy::math::Quat;
+use bevy::prelude::*;
+
+use super::*;
+
+fn rest(mesh: Mesh, transform: Transform) -> RestMesh {
+    RestMesh::from_mesh(&mesh.transformed_by(transform)).unwrap()
+}
+
+fn half_extents(s: &RestSphere) -> Vec3 {
+    Vec3::new(
+        s.axes.x_axis.length(),
+        s.axes.y_axis.length(),
+        s.axes.z_axis.length(),
+    )
+}
+
+#[test]
+fn a_box_is_one_box() {
+    let turned = Transform::from_rotation(Quat::from_euler(EulerRot::XYZ, 0.3, 0.7, -0.2));
+    let fitted = fit_boxes(&rest(Cuboid::new(1.0, 0.5, 2.0).into(), turned), 16);
+    assert_eq!(fitted.spheres.len(), 1, "{:?}", fitted.spheres);
+    let mut half = half_extents(&fitted.spheres[0]).to_array();
+    half.sort_by(f32::total_cmp);
+    for (got, want) in half.iter().zip([0.25, 0.5, 1.0]) {
+        assert!((got - want).abs() < 0.03, "{half:?}");
+    }
+    assert!(fitted.spheres[0].center.length() < 0.02);
+}
+
+#[test]
+fn a_floor_is_one_flat_box() {
+    let fitted = fit_boxes(
+        &rest(
+            Plane3d::default().mesh().size(20.0, 20.0).build(),
+            Transform::IDENTITY,
+        ),
+        16,
+    );
+    assert_eq!(fitted.spheres.len(), 1);
+    let h = half_extents(&fitted.spheres[0]);
+    let mut sorted = h.to_array();
+    sorted.sort_by(f32::total_cmp);
+    assert!(sorted[0] < 1e-4, "a floor has no thickness: {h}");
+    assert!(
+        (sorted[1] - 10.0).abs() < 0.1 && (sorted[2] - 10.0).abs() < 0.1,
+        "{h}"
+    );
+}
+
+#[test]
+fn an_l_shape_takes_two_boxes() {
+    // Two 1 × 0.2 × 0.2 bars meeting at a corner.
+    let mut mesh: Mesh = Cuboid::new(1.0, 0.2, 0.2).into();
+    mesh = mesh.transformed_by(Transform::from_xyz(0.5, 0.0, 0.0));
+    let mut other: Mesh = Cuboid::new(0.2, 1.0, 0.2).into();
+    other = other.transformed_by(Transform::from_xyz(-0.1, 0.6, 0.0));
+    mesh.merge(&other).unwrap();
+    let fitted = fit_boxes(&RestMesh::from_mesh(&mesh).unwrap(), 16);
+    assert!(
+        (2..=4).contains(&fitted.spheres.len()),
+        "{} boxes",
+        fitted.spheres.len()
+    );
+    let volume: f32 = fitted
+        .spheres
+        .iter()
+        .map(|s| 8.0 * half_extents(s).x * half_extents(s).y * half_extents(s).z)
+        .sum();
+    // The solid is 0.08 m³; its bounding box 0.24 m³.
+    assert!((0.06..0.12).contains(&volume), "boxes hold {volume} m³");
+}
+
+#[test]
+fn a_ball_gets_a_box_of_its_mean_silhouette() {
+    let fitted = fit_boxes(
+        &rest(Sphere::new(0.5).mesh().uv(32, 16), Transform::IDENTITY),
+        1,
+    );
+    assert_eq!(fitted.spheres.len(), 1);
+    let h = half_extents(&fitted.spheres[0]);
+    // Averaged over directions a cube shows 1.5 faces: 6h² = π r².
+    for side in h.to_array() {
+        let mean = 6.0 * side * side;
+        assert!(
+            (mean / (std::f32::consts::PI * 0.25) - 1.0).abs() < 0.1,
+            "{h}"
+        );
+    }
+}
+
+#[test]
+fn every_vertex_belongs_to_a_box() {
+    let mesh = rest(Capsule3d::new(0.2, 1.0).mesh().into(), Transform::IDENTITY);
+    let fitted = fit_boxes(&mesh, 4);
+    assert_eq!(fitted.order.len(), mesh.positions.len());
+    assert!(!fitted.spheres.is_empty() && fitted.spheres.len() <= 4);
+}
