@@ -7,7 +7,7 @@ use bevy::app::{App, Plugin};
 use bevy::core_pipeline::{prepass::ViewPrepassTextures, schedule::Core3d};
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderApp, RenderSystems,
+    GpuResourceAppExt, Render, RenderSystems,
     camera::ExtractedCamera,
     extract_component::{ComponentUniforms, DynamicUniformIndex},
     render_resource::{
@@ -19,10 +19,13 @@ use bevy::render::{
 };
 use bevy::utils::default;
 
+use crate::capabilities;
 use crate::dispatch::{ComputeStep, record_passes};
-use crate::schedule::DynamicAoSystems;
+use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 use crate::settings::AoTechnique;
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, PendingPasses,
+};
 
 /// Registers the shared pipelines, bind groups and pass of the image-space techniques.
 pub(crate) struct ImageSpacePlugin;
@@ -31,16 +34,38 @@ impl Plugin for ImageSpacePlugin {
     fn build(&self, _app: &mut App) {}
 
     fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
             .init_gpu_resource::<ImageSpacePipelines>()
             .add_systems(
                 Render,
-                prepare_image_space_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                (
+                    prepare_image_space_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    wait_for_image_space.in_set(DynamicAoPrepare::Readiness),
+                ),
             )
             .add_systems(Core3d, image_space_pass.in_set(DynamicAoSystems::NearField));
+    }
+}
+
+/// The view's image-space technique counts until its pipeline has compiled. `Off` has none to
+/// wait for; under Bevy's SSAO ours never take over.
+fn wait_for_image_space(
+    pipeline_cache: Res<PipelineCache>,
+    pipelines: Res<ImageSpacePipelines>,
+    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
+) {
+    for (view, mut pending) in &mut views {
+        let ready = match view.technique() {
+            AoTechnique::Off => true,
+            AoTechnique::BevySsao => false,
+            technique => pipelines
+                .pipeline(technique)
+                .is_some_and(|id| pipeline_cache.get_compute_pipeline(id).is_some()),
+        };
+        pending.wait_for(ready);
     }
 }
 
@@ -169,12 +194,12 @@ fn image_space_pass(
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
         pipelines
-            .pipeline(ao_view.technique)
+            .pipeline(ao_view.technique())
             .and_then(|id| pipeline_cache.get_compute_pipeline(id)),
     ) else {
         return;
     };
-    let label = match ao_view.technique {
+    let label = match ao_view.technique() {
         AoTechnique::Horizon => "dynamic_ao_horizon",
         AoTechnique::RayMarch => "dynamic_ao_ray_march",
         _ => "dynamic_ao_near_field",

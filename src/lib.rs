@@ -35,11 +35,68 @@
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
 //!    environment specular darken; direct lights are untouched.
 //!
+//! # Architecture
+//!
+//! One frame, from the camera component to PBR. Boxes are modules; every arrow into
+//! `compose` goes through the neutral per-view state of `view.rs` (settings, uniform, the
+//! far-field outputs and the count of passes still compiling), so `view.rs` and `compose`
+//! import no technique, and a technique is its folder plus one line in the plugin list below
+//! and one in [`schedule`].
+//!
+//! ```text
+//!  main world                         render world, per camera with DynamicAo
+//!  ----------                         ----------------------------------------
+//!  DynamicAo (settings.rs, each  ──►  view.rs: DynamicAoView + DynamicAoUniform,
+//!  technique's settings.rs)           back-face and occlusion textures
+//!                                        │
+//!  Bevy prepass (front layer) ───────►  nd_buffer/  back faces: second ND-buffer layer
+//!                                        │
+//!                                        ▼
+//!                                     image_space.rs runs near_field/ | horizon/ | ray_march/
+//!                                        │  (one pass, one shader per folder)
+//!  SphereOccluder ─► spheres/ refit ─►  spheres/  splat ───┐
+//!  AoField ────────► fields/ bake ────►  fields/   grid boxes ├─► FarFieldOutputs (view.rs)
+//!  VoxelAoVolume ──► voxels/ gather ──►  voxels/   voxelize, sample, upsample ┘   │
+//!                                        │                                        │
+//!                                        ▼                                        │
+//!                                     filter/   blur (and upsampling)             │
+//!                                        │                                        │
+//!                                        ▼                                        ▼
+//!                                     compose/  near ⊕ far → visibility in Bevy's SSAO texture
+//!                                        │
+//!                                        ▼
+//!                                     Bevy PBR: ambient and indirect light × visibility
+//! ```
+//!
+//! Shared code has no rendering in it: [`geometry`] (rest meshes, skinning and morphing,
+//! triangles, BVH, closedness, hash) serves the techniques and [`reference`](mod@reference);
+//! `src/shaders/` holds the WGSL every pass imports (ND-buffer reads, sampling, cap and proxy
+//! occlusion, Wendland's kernel). Production code never imports `reference`.
+//!
+//! Where each paper's equations live (the CPU twin of each shader is in `reference/`):
+//!
+//! | paper | equation | file |
+//! | --- | --- | --- |
+//! | Shanmugam & Arikan 2007 | §4.1–4.2 ND-buffer, two layers | `shaders/nd_buffer.wgsl`, `nd_buffer/back_faces.wgsl` |
+//! | | eq. 2–3, occlusion by one sphere | `shaders/sphere_occlusion.wgsl` |
+//! | | eq. 2–4, near field | `near_field/near_field.wgsl` |
+//! | | §5.2 splatting, eq. 5 d_far | `spheres/splat.wgsl`, `spheres/component.rs` (`far_field_reach`) |
+//! | | §5.3 refit | `spheres/refit.rs` |
+//! | Malmer et al. 2005 | §3.1 baking | `fields/baker.rs` |
+//! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` |
+//! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
+//! | | ray-marched AO | `ray_march/ray_march.wgsl` |
+//! | | cross-bilateral blur | `filter/blur.wgsl` |
+//! | Reinbothe et al. 2009 | §5 voxelization | `voxels/voxelize.wgsl` |
+//! | | §6 eq. 2–3, rays through the grid, Wendland's kernel | `voxels/voxel_ao.wgsl`, `shaders/math.wgsl` |
+//! | | §7 eq. 5–7, joint bilateral upsampling | `filter/upsample.wgsl` |
+//!
 //! [`reference`](mod@reference) evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
 //! the benchmarks and the `ao_capture` example use it.
 
 #![warn(missing_docs)]
 
+mod capabilities;
 pub mod compose;
 mod dispatch;
 pub mod fields;

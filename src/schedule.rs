@@ -7,7 +7,7 @@ use bevy::app::App;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::ecs::schedule::{IntoScheduleConfigs, SystemSet};
 use bevy::pbr::main_build_indirect_parameters;
-use bevy::render::RenderApp;
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
 
 /// The passes of the plugin in the [`Core3d`] schedule, listed in the order they run.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -25,6 +25,26 @@ pub enum DynamicAoSystems {
     Compose,
     /// Debug view and read-back copies, after the lit image exists.
     Debug,
+    /// Overlays drawn over the debug view (occupied voxels).
+    DebugOverlay,
+}
+
+/// Extraction of the plugin's per-view state, in order.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum DynamicAoExtract {
+    /// Each far-field technique notes whether it has occluders this frame.
+    Occluders,
+    /// The settings and uniform of each view, which switch off the terms without occluders.
+    Views,
+}
+
+/// Preparation steps of the plugin that need an order in Bevy's [`Render`] schedule.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum DynamicAoPrepare {
+    /// Each technique counts the passes of a view that have not compiled yet.
+    Readiness,
+    /// Our passes take over Bevy's SSAO texture on views where all have compiled.
+    HandOver,
 }
 
 pub(crate) fn configure(app: &mut App) {
@@ -46,10 +66,25 @@ pub(crate) fn configure(app: &mut App) {
     );
     render_app.configure_sets(
         Core3d,
-        Debug
+        (Debug, DebugOverlay)
+            .chain()
             // The debug view overwrites the lit image, and read-backs copy final values.
             .after(Core3dSystems::MainPass)
             // Tonemapping and the rest of post-processing still apply to the debug view.
             .before(Core3dSystems::EarlyPostProcess),
+    );
+    render_app.configure_sets(
+        ExtractSchedule,
+        // A view's uniform leaves out the far-field terms that have no occluders.
+        DynamicAoExtract::Occluders.before(DynamicAoExtract::Views),
+    );
+    render_app.configure_sets(
+        Render,
+        (DynamicAoPrepare::Readiness, DynamicAoPrepare::HandOver)
+            .chain()
+            // Pipelines are compiled during `Prepare`, and Bevy inserts `SsaoPipelineId` there,
+            // which the hand-over removes before Bevy's pass would read it.
+            .after(RenderSystems::Prepare)
+            .before(RenderSystems::Render),
     );
 }

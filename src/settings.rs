@@ -1,9 +1,17 @@
-//! The camera component and its quality presets.
+//! The camera component, the technique it runs, how near and far field join, and the presets.
 
 use bevy::ecs::component::Component;
 use bevy::ecs::reflect::ReflectComponent;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::reflect::{Reflect, std_traits::ReflectDefault};
+
+// Each technique's settings live in its folder; they are named here too, beside the component
+// that holds them.
+pub use crate::fields::settings::FieldShading;
+pub use crate::filter::settings::{AoBlur, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS};
+pub use crate::horizon::settings::{HorizonMode, HorizonParams};
+pub use crate::near_field::settings::{AoQuality, NearFieldParams};
+pub use crate::ray_march::settings::RayMarchParams;
 
 /// Default world-space AO radius r_far, in metres.
 pub const DEFAULT_RADIUS: f32 = 0.75;
@@ -12,11 +20,6 @@ pub const DEFAULT_RADIUS: f32 = 0.75;
 pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.5;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
-/// Default half-width of the cross-bilateral blur, pixels.
-pub const DEFAULT_BLUR_RADIUS: u32 = 4;
-/// Default depth sharpness of the cross-bilateral blur (no unit).
-pub const DEFAULT_BLUR_SHARPNESS: f32 = 16.0;
-
 /// Dynamic ambient occlusion for a 3D camera.
 ///
 /// Put it on a `Camera3d`. It brings Bevy's depth and normal prepasses (through
@@ -211,54 +214,6 @@ impl DynamicAo {
     }
 }
 
-/// Separable cross-bilateral blur of the occlusion buffer, X then Y (Bavoil & Sainz 2008,
-/// "Cross Bilateral Filter"): a Gaussian in image space whose weights fall with the difference in
-/// view depth, so occlusion does not bleed across silhouettes.
-#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub struct AoBlur {
-    /// Half-width of the kernel; the kernel is `2 * radius + 1` pixels wide per pass and its
-    /// Gaussian has σ = (radius + 1) / 2. Units: pixels. Valid: 0 (off) ..= 16.
-    /// Default: [`DEFAULT_BLUR_RADIUS`].
-    pub radius: u32,
-    /// How fast a sample's weight falls with its depth difference, relative to the centre
-    /// pixel's depth: weight × exp(−(sharpness · Δz / z)²). 0 is a plain Gaussian. No unit.
-    /// Valid: ≥ 0. Default: [`DEFAULT_BLUR_SHARPNESS`].
-    pub sharpness: f32,
-}
-
-impl Default for AoBlur {
-    fn default() -> Self {
-        Self {
-            radius: DEFAULT_BLUR_RADIUS,
-            sharpness: DEFAULT_BLUR_SHARPNESS,
-        }
-    }
-}
-
-impl AoBlur {
-    /// Largest radius the blur accepts.
-    pub const MAX_RADIUS: u32 = 16;
-
-    /// No blur.
-    pub const OFF: AoBlur = AoBlur {
-        radius: 0,
-        sharpness: DEFAULT_BLUR_SHARPNESS,
-    };
-
-    /// The same blur clamped into its valid ranges (a bad sharpness becomes the default).
-    pub fn sanitized(&self) -> Self {
-        Self {
-            radius: self.radius.min(Self::MAX_RADIUS),
-            sharpness: if self.sharpness.is_finite() && self.sharpness >= 0.0 {
-                self.sharpness
-            } else {
-                DEFAULT_BLUR_SHARPNESS
-            },
-        }
-    }
-}
-
 /// Complete configurations for [`DynamicAo::from_preset`].
 #[derive(Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[reflect(Clone, Debug, PartialEq, Hash)]
@@ -291,20 +246,6 @@ impl AoPreset {
             AoPreset::Ultra => "ultra",
         }
     }
-}
-
-/// How an AO field turns its stored occlusion into the share of a receiver's ambient light it
-/// blocks (Malmer et al. 2005).
-#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[reflect(Default, Clone, Debug, PartialEq, Hash)]
-pub enum FieldShading {
-    /// The cone of occluded directions clipped by the receiver's tangent plane, with the
-    /// diffuse cosine: T_clip(a, cos β) (§3.3.1). Also right on the object's own surface.
-    #[default]
-    Cone,
-    /// Twice the blocked share of the sphere, 2a (§3.2): cheaper, ignores the receiver's
-    /// normal, and darkens the object's own surface.
-    OcclusionOnly,
 }
 
 /// How near-field (image-space) and far-field (spheres, AO fields, voxel volumes) occlusion
@@ -394,232 +335,6 @@ impl AoTechnique {
             .find(|(_, t)| *t == self)
             .map(|(n, _)| *n)
             .unwrap_or("none")
-    }
-}
-
-/// Parameters of horizon-based AO (Bavoil & Sainz 2008, "Horizon-Based Ambient Occlusion").
-/// The radius is [`DynamicAo::radius`].
-#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub struct HorizonParams {
-    /// Image-space directions per pixel, randomly rotated per pixel. Valid: 1..=32. Default: 8.
-    pub directions: u32,
-    /// Most steps per direction; fewer where the projected radius covers fewer pixels.
-    /// Valid: 1..=32. Default: 8.
-    pub steps: u32,
-    /// Raises the tangent plane by this angle, hiding creases of coarse tessellation.
-    /// Units: radians. Valid: 0..π/2. Default: 0.1.
-    pub angle_bias: f32,
-    /// W0: scale of the per-sample attenuation W0 · W(r/R), W(x) = 1 − x². No unit.
-    /// Valid: ≥ 0. Default: 1.
-    pub attenuation: f32,
-    /// Scale on the integrated occlusion. No unit. Valid: ≥ 0. Default: 1.
-    pub contrast: f32,
-    /// Which of the whitepaper's three modes. Default: [`HorizonMode::Normal`].
-    pub mode: HorizonMode,
-}
-
-/// The three modes of horizon-based AO (Bavoil & Sainz 2008).
-#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[reflect(Default, Clone, Debug, PartialEq, Hash)]
-pub enum HorizonMode {
-    /// No normals: the horizon is integrated over the whole sphere (from straight down) and the
-    /// lower half, one unit of W0 per direction, is subtracted.
-    Low,
-    /// The hemisphere around the per-pixel normal: each direction starts at the elevation of the
-    /// tangent plane.
-    #[default]
-    Normal,
-    /// As `Normal`, with a more accurate starting horizon and less banding: each direction starts
-    /// at the higher of the tangent plane and the surface one pixel away along it (the depth
-    /// buffer's own tangent, which hides the facets of coarse meshes), and the step offsets are
-    /// jittered per direction rather than per pixel.
-    High,
-}
-
-impl HorizonMode {
-    /// Every mode, from cheapest to most accurate.
-    pub const ALL: [HorizonMode; 3] = [HorizonMode::Low, HorizonMode::Normal, HorizonMode::High];
-
-    /// The value the shaders and `reference::horizon` take: 0 low, 1 normal, 2 high.
-    pub fn shader_index(self) -> u32 {
-        match self {
-            HorizonMode::Low => 0,
-            HorizonMode::Normal => 1,
-            HorizonMode::High => 2,
-        }
-    }
-}
-
-impl Default for HorizonParams {
-    fn default() -> Self {
-        Self {
-            directions: 8,
-            steps: 8,
-            angle_bias: 0.1,
-            attenuation: 1.0,
-            contrast: 1.0,
-            mode: HorizonMode::Normal,
-        }
-    }
-}
-
-impl HorizonParams {
-    /// The same parameters clamped into their valid ranges; bad floats become defaults.
-    pub fn sanitized(&self) -> Self {
-        let d = Self::default();
-        let valid = |v: f32, max: f32, default: f32| {
-            if v.is_finite() && (0.0..=max).contains(&v) {
-                v
-            } else {
-                default
-            }
-        };
-        Self {
-            directions: self.directions.clamp(1, 32),
-            steps: self.steps.clamp(1, 32),
-            angle_bias: valid(self.angle_bias, 1.5, d.angle_bias),
-            attenuation: valid(self.attenuation, f32::MAX, d.attenuation),
-            contrast: valid(self.contrast, f32::MAX, d.contrast),
-            mode: self.mode,
-        }
-    }
-}
-
-/// Parameters of the ray-marched reference (Bavoil & Sainz 2008, "Ray-Marched Ambient
-/// Occlusion"): `directions × rays_per_direction` cosine-weighted rays around the normal, each
-/// marched in `steps` equal steps over the radius R ([`DynamicAo::radius`]). A step is blocked
-/// where it lies behind the front layer and in front of the back-face layer (or, where no back
-/// face was drawn, less than R behind the front layer).
-#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub struct RayMarchParams {
-    /// Azimuths around the normal, randomly rotated per pixel. Valid: 1..=64. Default: 8.
-    pub directions: u32,
-    /// Elevations per azimuth, stratified for a cosine-weighted hemisphere. Valid: 1..=64.
-    /// Default: 4.
-    pub rays_per_direction: u32,
-    /// Samples per ray. Valid: 1..=64. Default: 8.
-    pub steps: u32,
-}
-
-impl Default for RayMarchParams {
-    fn default() -> Self {
-        Self {
-            directions: 8,
-            rays_per_direction: 4,
-            steps: 8,
-        }
-    }
-}
-
-impl RayMarchParams {
-    /// The same parameters clamped into their valid ranges.
-    pub fn sanitized(&self) -> Self {
-        Self {
-            directions: self.directions.clamp(1, 64),
-            rays_per_direction: self.rays_per_direction.clamp(1, 64),
-            steps: self.steps.clamp(1, 64),
-        }
-    }
-}
-
-/// Named parameter sets for the near-field pass, plus a custom form.
-#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub enum AoQuality {
-    /// At most 8 samples per pixel and layer.
-    Low,
-    /// At most 16 samples per pixel and layer.
-    Medium,
-    /// At most 32 samples per pixel and layer.
-    #[default]
-    High,
-    /// At most 64 samples per pixel and layer.
-    Ultra,
-    /// Explicit parameters.
-    Custom(NearFieldParams),
-}
-
-impl AoQuality {
-    /// The presets in increasing cost.
-    pub const PRESETS: [AoQuality; 4] = [
-        AoQuality::Low,
-        AoQuality::Medium,
-        AoQuality::High,
-        AoQuality::Ultra,
-    ];
-
-    /// The near-field parameters this preset stands for.
-    pub fn params(&self) -> NearFieldParams {
-        let max_samples = match self {
-            AoQuality::Low => 8,
-            AoQuality::Medium => 16,
-            AoQuality::High => 32,
-            AoQuality::Ultra => 64,
-            AoQuality::Custom(params) => return params.sanitized(),
-        };
-        NearFieldParams {
-            max_samples,
-            ..NearFieldParams::default()
-        }
-    }
-
-    /// Lower-case name (`low`, `medium`, `high`, `ultra`, `custom`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            AoQuality::Low => "low",
-            AoQuality::Medium => "medium",
-            AoQuality::High => "high",
-            AoQuality::Ultra => "ultra",
-            AoQuality::Custom(_) => "custom",
-        }
-    }
-
-    /// The preset with this lower-case name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::PRESETS.into_iter().find(|q| q.name() == name)
-    }
-}
-
-/// Parameters of the near-field pass (Shanmugam & Arikan 2007, §4.2).
-#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub struct NearFieldParams {
-    /// Most neighbouring pixels gathered per receiver and layer. The count actually used
-    /// scales with the projected r_far: one per pixel inside the projected disk at most
-    /// (S&A fig. 4). Valid: 1..=256. Default: 32 (the `High` preset).
-    pub max_samples: u32,
-    /// Fewest neighbouring pixels gathered per receiver and layer, however small r_far
-    /// projects. Valid: 1..=max_samples. Default: 4.
-    pub min_samples: u32,
-    /// Also gather occluders from the back-face layer (S&A §4.2: "the first two layers").
-    /// Default: `true`.
-    pub back_layer: bool,
-}
-
-impl Default for NearFieldParams {
-    fn default() -> Self {
-        Self {
-            max_samples: 32,
-            min_samples: 4,
-            back_layer: true,
-        }
-    }
-}
-
-impl NearFieldParams {
-    /// Most samples a custom parameter set may ask for.
-    pub const MAX_SAMPLES: u32 = 256;
-
-    /// The same parameters clamped into their valid ranges.
-    pub fn sanitized(&self) -> Self {
-        let max_samples = self.max_samples.clamp(1, Self::MAX_SAMPLES);
-        Self {
-            max_samples,
-            min_samples: self.min_samples.clamp(1, max_samples),
-            back_layer: self.back_layer,
-        }
     }
 }
 

@@ -1,14 +1,22 @@
 //! Per-camera state: main-world checks, extraction into the render world, per-view textures.
+//!
+//! This module holds what every view has whatever its techniques: the settings, the uniform,
+//! the ND-buffer's back layer and the image-space occlusion. Each far-field technique keeps its
+//! own per-view state in its folder and meets the rest of the plugin only through three
+//! neutral things here: it says whether it has occluders ([`FarTermsPresent`]), it hands its
+//! output to compose ([`FarFieldOutputs`]) and it says while its passes are still compiling
+//! ([`PendingPasses`]).
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::camera::{Camera, Camera3d};
 use bevy::ecs::prelude::*;
 use bevy::image::ToExtents;
 use bevy::log::warn;
+use bevy::math::UVec2;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::platform::collections::HashSet;
 use bevy::render::{
-    Extract, ExtractSchedule, Render, RenderApp, RenderSystems,
+    Extract, ExtractSchedule, Render, RenderSystems,
     camera::ExtractedCamera,
     extract_component::UniformComponentPlugin,
     render_resource::{
@@ -20,11 +28,9 @@ use bevy::render::{
     view::Msaa,
 };
 
-use crate::fields::ActiveAoField;
-use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::capabilities;
+use crate::schedule::DynamicAoExtract;
 use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
-use crate::spheres::OccluderSpheres;
-use crate::voxels::VoxelGridInfo;
 
 /// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.
 pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
@@ -44,11 +50,18 @@ impl Plugin for ViewPlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(PostUpdate, check_cameras)
             .add_plugins(UniformComponentPlugin::<DynamicAoUniform>::default());
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
-            .add_systems(ExtractSchedule, extract_views)
+            .init_resource::<FarTermsPresent>()
+            .add_systems(
+                ExtractSchedule,
+                extract_views.in_set(DynamicAoExtract::Views),
+            )
             .add_systems(
                 Render,
                 prepare_view_textures.in_set(RenderSystems::PrepareResources),
@@ -142,31 +155,95 @@ fn check_cameras(
     }
 }
 
+/// A far-field term: one kind of occluder proxy with its own pass, made by the technique folder
+/// of the same name and joined by compose.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(crate) enum FarTerm {
+    /// Sphere (box) occluders (`spheres/`).
+    Spheres,
+    /// AO field occluders (`fields/`).
+    Fields,
+    /// Voxel volumes (`voxels/`).
+    Voxels,
+}
+
+impl FarTerm {
+    const COUNT: usize = 3;
+}
+
+/// Whether any occluder of each far-field term exists this frame: each technique's extraction
+/// writes its own entry. Without occluders a term's pass, buffer clear and compose read are
+/// skipped.
+#[derive(Resource, Default)]
+pub(crate) struct FarTermsPresent([bool; FarTerm::COUNT]);
+
+impl FarTermsPresent {
+    /// Records whether `term` has occluders this frame.
+    pub fn set(&mut self, term: FarTerm, present: bool) {
+        self.0[term as usize] = present;
+    }
+}
+
 /// Render-world settings of a view that runs the plugin.
 #[derive(Component, Clone, Debug)]
 pub(crate) struct DynamicAoView {
-    pub technique: AoTechnique,
+    /// The camera's component as the user set it; each technique reads its own settings here.
+    pub settings: DynamicAo,
     pub back_layer: bool,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.
     pub half_resolution: bool,
-    /// The far field of sphere occluders takes part.
-    pub far_field: bool,
-    /// AO field occluders take part.
-    pub fields: bool,
-    pub field_shading: crate::settings::FieldShading,
-    /// Voxel volumes take part.
-    pub voxels: bool,
-    /// The voxel occlusion is blurred after upsampling.
-    pub voxel_blur: bool,
-    pub debug_view: bool,
+    /// The far-field terms that take part, by [`FarTerm`].
+    far_terms: [bool; FarTerm::COUNT],
 }
 
 impl DynamicAoView {
+    /// The view's technique.
+    pub fn technique(&self) -> AoTechnique {
+        self.settings.technique
+    }
+
+    /// Whether `term` takes part on this view.
+    pub fn has(&self, term: FarTerm) -> bool {
+        self.far_terms[term as usize]
+    }
+
     /// Whether our passes replace Bevy's SSAO on this view.
     pub fn replaces_bevy_ssao(&self) -> bool {
-        self.technique != AoTechnique::BevySsao
+        self.technique() != AoTechnique::BevySsao
+    }
+}
+
+/// The far-field output of each term on a view, for compose: the technique that owns the term
+/// makes and writes it while the term takes part. Renewed empty at every extraction.
+#[derive(Component, Default)]
+pub(crate) struct FarFieldOutputs([Option<CachedTexture>; FarTerm::COUNT]);
+
+impl FarFieldOutputs {
+    pub fn get(&self, term: FarTerm) -> Option<&CachedTexture> {
+        self.0[term as usize].as_ref()
+    }
+
+    pub fn set(&mut self, term: FarTerm, texture: CachedTexture) {
+        self.0[term as usize] = Some(texture);
+    }
+}
+
+/// How many of a view's passes have not compiled yet: each technique adds its own (see
+/// `DynamicAoPrepare::Readiness`); our passes take over from Bevy's SSAO at 0. Renewed at every
+/// extraction.
+#[derive(Component, Default)]
+pub(crate) struct PendingPasses(u32);
+
+impl PendingPasses {
+    /// Counts one pass that has not compiled, unless `ready`.
+    pub fn wait_for(&mut self, ready: bool) {
+        self.0 += u32::from(!ready);
+    }
+
+    pub fn all_ready(&self) -> bool {
+        self.0 == 0
     }
 }
 
@@ -181,8 +258,8 @@ pub(crate) struct DynamicAoUniform {
     pub min_samples: u32,
     /// 1 when the back-face layer takes part.
     pub back_layer: u32,
-    /// 1 when an image-space term (near-field or horizon) is on.
-    pub near_field: u32,
+    /// 1 when an image-space technique (near field, horizon or ray march) is on.
+    pub image_space: u32,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
     /// Blur depth sharpness, no unit.
@@ -200,8 +277,8 @@ pub(crate) struct DynamicAoUniform {
     pub ray_steps: u32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
-    /// 1 when the far field of sphere occluders takes part.
-    pub far_field: u32,
+    /// 1 when sphere occluders take part.
+    pub spheres: u32,
     /// 0: near + far, 1: max(near, far) (see [`crate::FarFieldBlend`]).
     pub far_field_blend: u32,
     /// 1 when AO field occluders take part.
@@ -233,18 +310,17 @@ fn extract_views(
             With<Camera3d>,
         >,
     >,
-    sphere_occluders: Extract<Query<(), With<OccluderSpheres>>>,
-    field_occluders: Extract<Query<(), With<ActiveAoField>>>,
-    voxel_volumes: Extract<Query<(), With<VoxelGridInfo>>>,
+    present: Res<FarTermsPresent>,
 ) {
-    // Without occluders of a kind its pass, buffer clear and compose read are skipped.
-    let any_spheres = !sphere_occluders.is_empty();
-    let any_fields = !field_occluders.is_empty();
-    let any_volumes = !voxel_volumes.is_empty();
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
         if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
-            entity_commands.remove::<(DynamicAoView, DynamicAoUniform)>();
+            entity_commands.remove::<(
+                DynamicAoView,
+                DynamicAoUniform,
+                FarFieldOutputs,
+                PendingPasses,
+            )>();
             continue;
         }
         let params = ao.quality.params();
@@ -255,14 +331,20 @@ fn extract_views(
         let horizon = ao.horizon.sanitized();
         let rays = ao.ray_march.sanitized();
         // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
-        let far_field = ao.spheres && any_spheres && ao.technique != AoTechnique::BevySsao;
-        let fields = ao.fields && any_fields && ao.technique != AoTechnique::BevySsao;
-        let voxels = ao.voxels && any_volumes && ao.technique != AoTechnique::BevySsao;
+        let term = |term: FarTerm, on: bool| {
+            on && present.0[term as usize] && ao.technique != AoTechnique::BevySsao
+        };
+        let far_terms = [
+            term(FarTerm::Spheres, ao.spheres),
+            term(FarTerm::Fields, ao.fields),
+            term(FarTerm::Voxels, ao.voxels),
+        ];
+        let [spheres, fields, voxels] = far_terms;
         // Under CountOnce the image-space technique counts what the ND-buffer shows within its
         // own reach, and the far field everything else within R.
         let radius = ao.effective_radius();
         let count_once = image_space
-            && (far_field || fields || voxels)
+            && far_terms.contains(&true)
             && ao.far_field_blend == FarFieldBlend::CountOnce;
         let near_radius = if count_once {
             radius.min(ao.effective_near_field_radius())
@@ -272,24 +354,21 @@ fn extract_views(
         let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
         entity_commands.insert((
             DynamicAoView {
-                technique: ao.technique,
+                settings: ao.clone(),
                 back_layer,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
-                far_field,
-                fields,
-                field_shading: ao.field_shading,
-                voxels,
-                voxel_blur: voxels && blur.radius > 0,
-                debug_view: ao.debug_view,
+                far_terms,
             },
+            FarFieldOutputs::default(),
+            PendingPasses::default(),
             DynamicAoUniform {
                 radius: near_radius,
                 intensity: ao.effective_intensity(),
                 max_samples: params.max_samples,
                 min_samples: params.min_samples,
                 back_layer: u32::from(params.back_layer),
-                near_field: u32::from(image_space),
+                image_space: u32::from(image_space),
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,
                 horizon_directions: horizon.directions,
@@ -302,7 +381,7 @@ fn extract_views(
                 ray_elevations: rays.rays_per_direction,
                 ray_steps: rays.steps,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
-                far_field: u32::from(far_field),
+                spheres: u32::from(spheres),
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),
                 voxels: u32::from(voxels),
@@ -326,16 +405,43 @@ pub(crate) struct DynamicAoTextures {
     pub full_occlusion: CachedTexture,
     /// Between the two passes of the blur.
     pub blur_scratch: CachedTexture,
-    /// Product of the sphere occluders' visibilities, full size.
-    pub sphere_visibility: CachedTexture,
-    /// Product of the AO field occluders' visibilities, full size.
-    pub field_visibility: CachedTexture,
-    /// Voxel occlusion as sampled (half size), and upsampled and filtered (full size); only
-    /// while voxel volumes take part.
-    pub voxel_low: Option<CachedTexture>,
-    pub voxel_occlusion: Option<CachedTexture>,
-    /// Between the two passes of the voxel blur.
-    pub voxel_scratch: Option<CachedTexture>,
+}
+
+/// The size of a view's image in pixels, `None` while it has none.
+pub(crate) fn view_size(camera: &ExtractedCamera) -> Option<UVec2> {
+    camera
+        .physical_viewport_size
+        .filter(|size| size.x > 0 && size.y > 0)
+}
+
+/// Half of a view's size, rounded up: the size of half-resolution buffers.
+pub(crate) fn half_size(size: UVec2) -> UVec2 {
+    (size + 1) / 2
+}
+
+/// One per-view 2D texture from Bevy's texture cache (reused across frames while its
+/// description stays the same).
+pub(crate) fn view_texture(
+    texture_cache: &mut TextureCache,
+    render_device: &RenderDevice,
+    label: &'static str,
+    size: UVec2,
+    format: TextureFormat,
+    usage: TextureUsages,
+) -> CachedTexture {
+    texture_cache.get(
+        render_device,
+        TextureDescriptor {
+            label: Some(label),
+            size: size.to_extents(),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        },
+    )
 }
 
 fn prepare_view_textures(
@@ -345,27 +451,18 @@ fn prepare_view_textures(
     views: Query<(Entity, &ExtractedCamera, &DynamicAoView)>,
 ) {
     for (entity, camera, view) in &views {
-        let Some(size) = camera
-            .physical_viewport_size
-            .filter(|size| size.x > 0 && size.y > 0)
-        else {
+        let Some(size) = view_size(camera) else {
             commands.entity(entity).remove::<DynamicAoTextures>();
             continue;
         };
-        let full = size.to_extents();
         let mut texture = |label, size, format, usage| {
-            texture_cache.get(
+            view_texture(
+                &mut texture_cache,
                 &render_device,
-                TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                },
+                label,
+                size,
+                format,
+                usage,
             )
         };
         let attachment = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
@@ -373,67 +470,24 @@ fn prepare_view_textures(
         let near_occlusion = if view.half_resolution {
             texture(
                 "dynamic_ao_half_occlusion",
-                ((size + 1) / 2).to_extents(),
+                half_size(size),
                 OCCLUSION_FORMAT,
                 storage,
             )
         } else {
-            texture("dynamic_ao_near_occlusion", full, OCCLUSION_FORMAT, storage)
+            texture("dynamic_ao_near_occlusion", size, OCCLUSION_FORMAT, storage)
         };
         let full_occlusion = if view.half_resolution {
-            texture("dynamic_ao_full_occlusion", full, OCCLUSION_FORMAT, storage)
+            texture("dynamic_ao_full_occlusion", size, OCCLUSION_FORMAT, storage)
         } else {
             near_occlusion.clone()
         };
-        let half = ((size + 1) / 2).to_extents();
-        // Voxel occlusion has two channels: the near field's share and the rest.
-        let (voxel_low, voxel_occlusion, voxel_scratch) = if view.voxels {
-            (
-                Some(texture(
-                    "dynamic_ao_voxel_low",
-                    half,
-                    OCCLUSION_PAIR_FORMAT,
-                    storage,
-                )),
-                Some(texture(
-                    "dynamic_ao_voxel_occlusion",
-                    full,
-                    OCCLUSION_PAIR_FORMAT,
-                    storage,
-                )),
-                view.voxel_blur.then(|| {
-                    texture(
-                        "dynamic_ao_voxel_scratch",
-                        full,
-                        OCCLUSION_PAIR_FORMAT,
-                        storage,
-                    )
-                }),
-            )
-        } else {
-            (None, None, None)
-        };
         commands.entity(entity).insert(DynamicAoTextures {
-            back_depth: texture("dynamic_ao_back_depth", full, DEPTH_FORMAT, attachment),
-            back_normal: texture("dynamic_ao_back_normal", full, NORMAL_FORMAT, attachment),
+            back_depth: texture("dynamic_ao_back_depth", size, DEPTH_FORMAT, attachment),
+            back_normal: texture("dynamic_ao_back_normal", size, NORMAL_FORMAT, attachment),
             near_occlusion,
             full_occlusion,
-            blur_scratch: texture("dynamic_ao_blur_scratch", full, OCCLUSION_FORMAT, storage),
-            sphere_visibility: texture(
-                "dynamic_ao_sphere_visibility",
-                full,
-                FAR_OCCLUSION_FORMAT,
-                attachment,
-            ),
-            field_visibility: texture(
-                "dynamic_ao_field_visibility",
-                full,
-                FAR_OCCLUSION_FORMAT,
-                attachment,
-            ),
-            voxel_low,
-            voxel_occlusion,
-            voxel_scratch,
+            blur_scratch: texture("dynamic_ao_blur_scratch", size, OCCLUSION_FORMAT, storage),
         });
     }
 }

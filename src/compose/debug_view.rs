@@ -75,7 +75,7 @@ pub(crate) fn prepare_debug_view_pipelines(
     views: Query<(Entity, &DynamicAoView, &ViewTarget)>,
 ) {
     for (entity, view, target) in &views {
-        if view.debug_view {
+        if view.settings.debug_view {
             let id = pipelines.specialize(&pipeline_cache, &pipeline, target.main_texture_format());
             commands.entity(entity).insert(DebugViewPipelineId(id));
         } else {

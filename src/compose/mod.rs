@@ -12,7 +12,7 @@
 //! The debug view draws the same visibility over the lit image, full screen.
 
 mod debug_view;
-pub(crate) mod node;
+mod node;
 mod pipeline;
 
 use bevy::app::{App, Plugin};
@@ -21,18 +21,13 @@ use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
 use bevy::pbr::SsaoPipelineId;
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderApp, RenderSystems,
+    GpuResourceAppExt, Render, RenderSystems,
     render_resource::{PipelineCache, SpecializedRenderPipelines},
 };
 
-use crate::fields::FieldPipelines;
-use crate::filter::BlurPipelines;
-use crate::image_space::ImageSpacePipelines;
-use crate::schedule::DynamicAoSystems;
-use crate::settings::{AoTechnique, FieldShading};
-use crate::spheres::SplatPipeline;
-use crate::view::DynamicAoView;
-use crate::voxels::VoxelPipelines;
+use crate::capabilities;
+use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::view::PendingPasses;
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
 pub struct ComposePlugin;
@@ -44,7 +39,7 @@ impl Plugin for ComposePlugin {
     }
 
     fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
@@ -55,10 +50,7 @@ impl Plugin for ComposePlugin {
                 Render,
                 (
                     debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
-                    // Bevy inserts `SsaoPipelineId` during `Prepare`; its pass needs it.
-                    hand_over_from_bevy_ssao
-                        .after(RenderSystems::Prepare)
-                        .before(RenderSystems::Render),
+                    hand_over_from_bevy_ssao.in_set(DynamicAoPrepare::HandOver),
                     (
                         pipeline::prepare_compose_bind_groups,
                         debug_view::prepare_debug_view_bind_groups,
@@ -83,45 +75,19 @@ pub(crate) struct AoPassesReady;
 
 /// Bevy's SSAO pass only runs on views that carry its pipeline id; taking it away hands the
 /// texture to us. Until every pass the view needs has compiled (pipelines compile in the
-/// background over several frames), Bevy's pass keeps running and ours stays off, so the image
-/// never shows an unwritten texture.
-fn hand_over_from_bevy_ssao(
+/// background over several frames; each technique counts its own in [`PendingPasses`]), Bevy's
+/// pass keeps running and ours stays off, so the image never shows an unwritten texture.
+pub(crate) fn hand_over_from_bevy_ssao(
     mut commands: Commands,
     pipeline_cache: Res<PipelineCache>,
-    image_space: Res<ImageSpacePipelines>,
-    blur: Res<BlurPipelines>,
     compose: Res<pipeline::ComposePipeline>,
-    splat: Res<SplatPipeline>,
-    fields: Res<FieldPipelines>,
-    voxels: Res<VoxelPipelines>,
-    views: Query<(Entity, &DynamicAoView, Has<SsaoPipelineId>)>,
+    views: Query<(Entity, &PendingPasses, Has<SsaoPipelineId>)>,
 ) {
-    let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
-    for (entity, view, bevy_ssao) in &views {
-        let technique = match view.technique {
-            AoTechnique::Off => true,
-            AoTechnique::BevySsao => false,
-            technique => image_space.pipeline(technique).is_some_and(ready),
-        };
-        let filter = (view.blur_radius == 0 || (ready(blur.one.x) && ready(blur.one.y)))
-            && (!view.half_resolution || ready(blur.one.upsample));
-        let far_field =
-            !view.far_field || pipeline_cache.get_render_pipeline(splat.pipeline).is_some();
-        let field_pipeline = match view.field_shading {
-            FieldShading::Cone => fields.cone,
-            FieldShading::OcclusionOnly => fields.occlusion_only,
-        };
-        let fields_ready =
-            !view.fields || pipeline_cache.get_render_pipeline(field_pipeline).is_some();
-        let voxels_ready = !view.voxels
-            || (ready(voxels.voxelize) && ready(voxels.sample) && blur.two.ready(&pipeline_cache));
-        if technique
-            && filter
-            && far_field
-            && fields_ready
-            && voxels_ready
-            && ready(compose.pipeline)
-        {
+    let compose_ready = pipeline_cache
+        .get_compute_pipeline(compose.pipeline)
+        .is_some();
+    for (entity, pending, bevy_ssao) in &views {
+        if compose_ready && pending.all_ready() {
             commands.entity(entity).insert(AoPassesReady);
             if bevy_ssao {
                 commands.entity(entity).remove::<SsaoPipelineId>();

@@ -13,7 +13,7 @@ use bevy::render::{
 };
 use bevy::utils::default;
 
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 #[derive(Resource)]
 pub(crate) struct ComposePipeline {
@@ -82,6 +82,7 @@ pub(crate) fn prepare_compose_bind_groups(
         (
             Entity,
             &DynamicAoTextures,
+            &FarFieldOutputs,
             &ScreenSpaceAmbientOcclusionResources,
         ),
         With<DynamicAoView>,
@@ -90,21 +91,24 @@ pub(crate) fn prepare_compose_bind_groups(
     let Some(settings_binding) = settings.binding() else {
         return;
     };
-    for (entity, textures, ssao) in &views {
+    for (entity, textures, outputs, ssao) in &views {
+        // Compose reads a term's binding only while the term takes part; otherwise any float
+        // texture of the view fits.
+        let far = |term| {
+            &outputs
+                .get(term)
+                .unwrap_or(&textures.full_occlusion)
+                .default_view
+        };
         let bind_group = render_device.create_bind_group(
             "dynamic_ao_compose_bind_group",
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
             &BindGroupEntries::sequential((
                 settings_binding.clone(),
                 &textures.full_occlusion.default_view,
-                &textures.sphere_visibility.default_view,
-                &textures.field_visibility.default_view,
-                // Without voxels nothing reads this binding; any float texture of the view fits.
-                &textures
-                    .voxel_occlusion
-                    .as_ref()
-                    .unwrap_or(&textures.sphere_visibility)
-                    .default_view,
+                far(FarTerm::Spheres),
+                far(FarTerm::Fields),
+                far(FarTerm::Voxels),
                 &ssao.screen_space_ambient_occlusion_texture.default_view,
             )),
         );

@@ -50,13 +50,15 @@ pub mod format;
 mod loader;
 mod node;
 mod render;
+pub mod settings;
 mod systems;
+mod view;
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::{AssetApp, embedded_asset};
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
-use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
 
 pub use baker::{BakeError, BakeSettings, FieldReach, bake, grid_box, grid_resolution};
 pub use component::{AoField, AoFieldCache};
@@ -66,7 +68,8 @@ pub use systems::{ActiveAoField, PendingAoField};
 
 pub(crate) use render::FieldPipelines;
 
-use crate::schedule::DynamicAoSystems;
+use crate::capabilities;
+use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 
 /// AO fields: the asset and its loader, baking on load, and the box pass.
 pub struct AoFieldPlugin;
@@ -84,26 +87,31 @@ impl Plugin for AoFieldPlugin {
                 // Skinned and morphed meshes are baked in their pose of this frame.
                 systems::resolve_fields.after(bevy::transform::TransformSystems::Propagate),
             );
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
             .init_resource::<render::FieldBuffers>()
-            .add_systems(ExtractSchedule, render::extract_fields)
+            .add_systems(
+                ExtractSchedule,
+                (
+                    render::extract_fields,
+                    view::note_field_occluders.in_set(DynamicAoExtract::Occluders),
+                ),
+            )
             .add_systems(
                 Render,
                 (
-                    render::write_field_buffers.in_set(RenderSystems::PrepareResources),
+                    (render::write_field_buffers, view::prepare_field_visibility)
+                        .in_set(RenderSystems::PrepareResources),
+                    view::wait_for_fields.in_set(DynamicAoPrepare::Readiness),
                     render::prepare_field_bind_groups.in_set(RenderSystems::PrepareBindGroups),
                 ),
             )
             .add_systems(Core3d, node::field_pass.in_set(DynamicAoSystems::FarField));
-    }
-
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
         render_app.init_gpu_resource::<FieldPipelines>();
     }
 }

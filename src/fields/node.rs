@@ -12,13 +12,12 @@ use bevy::render::{
 };
 
 use super::render::{FieldBindGroup, FieldBuffers, FieldPipelines};
-use crate::settings::FieldShading;
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 pub(crate) fn field_pass(
     view: ViewQuery<(
         &DynamicAoView,
-        &DynamicAoTextures,
+        &FarFieldOutputs,
         Option<&FieldBindGroup>,
         &ViewUniformOffset,
         &DynamicUniformIndex<DynamicAoUniform>,
@@ -28,10 +27,11 @@ pub(crate) fn field_pass(
     buffers: Res<FieldBuffers>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
-    if !ao_view.fields {
+    let (ao_view, outputs, bind_group, view_offset, settings_index) = view.into_inner();
+    let (true, Some(visibility)) = (ao_view.has(FarTerm::Fields), outputs.get(FarTerm::Fields))
+    else {
         return;
-    }
+    };
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     // Visibility starts at 1 (open) and each occluder multiplies it down; cleared even when no
@@ -39,7 +39,7 @@ pub(crate) fn field_pass(
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
         label: Some("dynamic_ao_fields"),
         color_attachments: &[Some(RenderPassColorAttachment {
-            view: &textures.field_visibility.default_view,
+            view: &visibility.default_view,
             depth_slice: None,
             resolve_target: None,
             ops: Operations {
@@ -53,10 +53,7 @@ pub(crate) fn field_pass(
         multiview_mask: None,
     });
     let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_fields");
-    let pipeline = match ao_view.field_shading {
-        FieldShading::Cone => pipelines.cone,
-        FieldShading::OcclusionOnly => pipelines.occlusion_only,
-    };
+    let pipeline = pipelines.for_shading(ao_view.settings.field_shading);
     if buffers.count > 0
         && let Some(bind_group) = bind_group
         && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline)

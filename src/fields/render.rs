@@ -24,7 +24,10 @@ use bytemuck::{Pod, Zeroable};
 
 use super::format::AoFieldData;
 use super::systems::ActiveAoField;
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT};
+use crate::settings::FieldShading;
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm,
+};
 
 /// One occluder as `fields.wgsl` reads it.
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -194,8 +197,18 @@ pub(crate) fn write_field_buffers(
 #[derive(Resource)]
 pub(crate) struct FieldPipelines {
     layout: BindGroupLayoutDescriptor,
-    pub occlusion_only: CachedRenderPipelineId,
-    pub cone: CachedRenderPipelineId,
+    occlusion_only: CachedRenderPipelineId,
+    cone: CachedRenderPipelineId,
+}
+
+impl FieldPipelines {
+    /// The pipeline that shades fields as `shading` says.
+    pub fn for_shading(&self, shading: FieldShading) -> CachedRenderPipelineId {
+        match shading {
+            FieldShading::Cone => self.cone,
+            FieldShading::OcclusionOnly => self.occlusion_only,
+        }
+    }
 }
 
 impl FromWorld for FieldPipelines {
@@ -289,9 +302,11 @@ pub(crate) fn prepare_field_bind_groups(
         return;
     };
     for (entity, view, textures, prepass) in &views {
-        let (true, Some(depth), Some(normal)) =
-            (view.fields, prepass.depth_view(), prepass.normal_view())
-        else {
+        let (true, Some(depth), Some(normal)) = (
+            view.has(FarTerm::Fields),
+            prepass.depth_view(),
+            prepass.normal_view(),
+        ) else {
             commands.entity(entity).remove::<FieldBindGroup>();
             continue;
         };

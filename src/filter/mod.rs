@@ -16,14 +16,17 @@
 
 mod node;
 mod pipeline;
+pub mod settings;
 
 use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
-use bevy::ecs::schedule::IntoScheduleConfigs;
-use bevy::render::{GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::ecs::prelude::*;
+use bevy::render::{GpuResourceAppExt, Render, RenderSystems, render_resource::PipelineCache};
 
-use crate::schedule::DynamicAoSystems;
+use crate::capabilities;
+use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::view::{DynamicAoView, PendingPasses};
 
 pub(crate) use pipeline::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
 
@@ -37,14 +40,17 @@ impl Plugin for FilterPlugin {
     }
 
     fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
             .init_gpu_resource::<pipeline::BlurPipelines>()
             .add_systems(
                 Render,
-                pipeline::prepare_blur_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                (
+                    pipeline::prepare_blur_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    wait_for_filter.in_set(DynamicAoPrepare::Readiness),
+                ),
             )
             .add_systems(
                 Core3d,
@@ -53,5 +59,18 @@ impl Plugin for FilterPlugin {
                     .chain()
                     .in_set(DynamicAoSystems::Filter),
             );
+    }
+}
+
+/// A view counts its blur and upsampling passes until they have compiled.
+fn wait_for_filter(
+    pipeline_cache: Res<PipelineCache>,
+    blur: Res<BlurPipelines>,
+    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
+) {
+    let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
+    for (view, mut pending) in &mut views {
+        pending.wait_for(view.blur_radius == 0 || (ready(blur.one.x) && ready(blur.one.y)));
+        pending.wait_for(!view.half_resolution || ready(blur.one.upsample));
     }
 }

@@ -11,6 +11,7 @@
 //! The whitepaper's low and high modes are named there but not spelled out; what they do here is
 //! documented on [`HorizonMode`](crate::settings::HorizonMode).
 
+pub mod settings;
 use bevy::app::{App, Plugin};
 use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
 use bevy::ecs::world::World;

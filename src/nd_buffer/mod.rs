@@ -16,11 +16,12 @@ use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::schedule::IntoScheduleConfigs;
 use bevy::pbr::{MeshPipeline, MeshPipelineSystems};
 use bevy::render::{
-    ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderStartup, RenderSystems,
+    ExtractSchedule, Render, RenderDebugFlags, RenderStartup, RenderSystems,
     render_phase::{AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system},
     render_resource::SpecializedMeshPipelines,
 };
 
+use crate::capabilities;
 use crate::schedule::DynamicAoSystems;
 pub use phase::BackFace3d;
 
@@ -33,7 +34,10 @@ impl Plugin for NdBufferPlugin {
         app.add_plugins(SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(
             RenderDebugFlags::default(),
         ));
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app

@@ -22,6 +22,7 @@
 //!   occluders hidden behind one another again and again (the over-occlusion of §6). For small
 //!   A_ψ the two agree.
 
+pub mod settings;
 use bevy::app::{App, Plugin};
 use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
 use bevy::ecs::world::World;

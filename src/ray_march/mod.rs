@@ -9,6 +9,7 @@
 //! the fraction of blocked rays. Costly, but its error against ray-traced ground truth shrinks as
 //! the ray count grows. `reference::ray_march` is the CPU twin.
 
+pub mod settings;
 use bevy::app::{App, Plugin};
 use bevy::asset::{Handle, embedded_asset, load_embedded_asset};
 use bevy::ecs::world::World;

@@ -15,11 +15,12 @@ use bevy::image::Image;
 use bevy::math::UVec2;
 use bevy::reflect::Reflect;
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderApp, RenderSystems,
+    GpuResourceAppExt, Render, RenderSystems,
     extract_component::{ExtractComponent, ExtractComponentPlugin},
     render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages},
 };
 
+use crate::capabilities;
 use crate::schedule::DynamicAoSystems;
 
 /// Asks the plugin to copy this camera's AO buffer and both ND-buffer layers every frame.
@@ -74,7 +75,7 @@ impl Plugin for ReadbackPlugin {
     }
 
     fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app

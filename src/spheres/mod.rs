@@ -55,12 +55,13 @@ pub mod refit;
 
 mod splat;
 mod systems;
+mod view;
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
-use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
 use bevy::transform::TransformSystems;
 
 pub use component::{
@@ -72,7 +73,8 @@ pub use systems::ASYNC_CLUSTERING_VERTICES;
 
 pub(crate) use splat::SplatPipeline;
 
-use crate::schedule::DynamicAoSystems;
+use crate::capabilities;
+use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 
 /// Sphere occluders: clustering, per-frame refit, and the splat pass.
 pub struct SphereOccluderPlugin;
@@ -102,27 +104,31 @@ impl Plugin for SphereOccluderPlugin {
             .register_type::<ShowOccluderSpheres>()
             // Draws the proxies of this frame's pose.
             .add_systems(PostUpdate, gizmos::draw_spheres.after(RefitSpheres));
+    }
 
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
             .init_resource::<splat::SphereBuffer>()
-            .add_systems(ExtractSchedule, splat::extract_spheres)
+            .add_systems(
+                ExtractSchedule,
+                (
+                    splat::extract_spheres,
+                    view::note_sphere_occluders.in_set(DynamicAoExtract::Occluders),
+                ),
+            )
             .add_systems(
                 Render,
                 (
-                    splat::write_sphere_buffer.in_set(RenderSystems::PrepareResources),
+                    (splat::write_sphere_buffer, view::prepare_sphere_visibility)
+                        .in_set(RenderSystems::PrepareResources),
+                    view::wait_for_splat.in_set(DynamicAoPrepare::Readiness),
                     splat::prepare_splat_bind_groups.in_set(RenderSystems::PrepareBindGroups),
                 ),
             )
             .add_systems(Core3d, node::splat_pass.in_set(DynamicAoSystems::FarField));
-    }
-
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
         render_app.init_gpu_resource::<SplatPipeline>();
     }
 }

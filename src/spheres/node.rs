@@ -12,12 +12,12 @@ use bevy::render::{
 };
 
 use super::splat::{SphereBuffer, SplatBindGroup, SplatPipeline};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 pub(crate) fn splat_pass(
     view: ViewQuery<(
         &DynamicAoView,
-        &DynamicAoTextures,
+        &FarFieldOutputs,
         Option<&SplatBindGroup>,
         &ViewUniformOffset,
         &DynamicUniformIndex<DynamicAoUniform>,
@@ -27,10 +27,11 @@ pub(crate) fn splat_pass(
     spheres: Res<SphereBuffer>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
-    if !ao_view.far_field {
+    let (ao_view, outputs, bind_group, view_offset, settings_index) = view.into_inner();
+    let (true, Some(visibility)) = (ao_view.has(FarTerm::Spheres), outputs.get(FarTerm::Spheres))
+    else {
         return;
-    }
+    };
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     // Visibility starts at 1 (open) and each proxy multiplies it down; the largest occlusion (alpha)
@@ -39,7 +40,7 @@ pub(crate) fn splat_pass(
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
         label: Some("dynamic_ao_spheres"),
         color_attachments: &[Some(RenderPassColorAttachment {
-            view: &textures.sphere_visibility.default_view,
+            view: &visibility.default_view,
             depth_slice: None,
             resolve_target: None,
             ops: Operations {

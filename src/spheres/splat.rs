@@ -20,7 +20,9 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT};
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm,
+};
 
 /// One proxy as `splat.wgsl` reads it: centre and bounding radius, the three half-extent vectors,
 /// then the kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and 1 for a proxy of
@@ -174,9 +176,11 @@ pub(crate) fn prepare_splat_bind_groups(
         return;
     };
     for (entity, view, textures, prepass) in &views {
-        let (true, Some(depth), Some(normal)) =
-            (view.far_field, prepass.depth_view(), prepass.normal_view())
-        else {
+        let (true, Some(depth), Some(normal)) = (
+            view.has(FarTerm::Spheres),
+            prepass.depth_view(),
+            prepass.normal_view(),
+        ) else {
             commands.entity(entity).remove::<SplatBindGroup>();
             continue;
         };

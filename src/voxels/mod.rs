@@ -59,13 +59,14 @@ mod gather;
 mod node;
 mod render;
 mod show;
+mod view;
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
 use bevy::render::render_resource::SpecializedRenderPipelines;
-use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderApp, RenderSystems};
+use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
 use bevy::shader::load_shader_library;
 use bevy::transform::TransformSystems;
 
@@ -76,7 +77,8 @@ pub use component::{
 
 pub(crate) use render::VoxelPipelines;
 
-use crate::schedule::DynamicAoSystems;
+use crate::capabilities;
+use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 
 /// Voxel volumes: per-frame gathering, voxelization, sampling and the occupied-voxel view.
 pub struct VoxelAoPlugin;
@@ -101,17 +103,28 @@ impl Plugin for VoxelAoPlugin {
                     // Joints and meshes have their final world transforms this frame.
                     .after(TransformSystems::Propagate),
             );
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
             return;
         };
         render_app
             .init_resource::<render::VoxelBuffers>()
             .init_resource::<SpecializedRenderPipelines<show::ShowVoxelsPipeline>>()
-            .add_systems(ExtractSchedule, render::extract_voxels)
+            .add_systems(
+                ExtractSchedule,
+                (
+                    render::extract_voxels,
+                    view::note_voxel_volumes.in_set(DynamicAoExtract::Occluders),
+                ),
+            )
             .add_systems(
                 Render,
                 (
-                    render::write_voxel_buffers.in_set(RenderSystems::PrepareResources),
+                    (render::write_voxel_buffers, view::prepare_voxel_textures)
+                        .in_set(RenderSystems::PrepareResources),
+                    node::wait_for_voxels.in_set(DynamicAoPrepare::Readiness),
                     render::prepare_voxel_bind_groups.in_set(RenderSystems::PrepareBindGroups),
                     show::prepare_show_voxels
                         .in_set(RenderSystems::PrepareBindGroups)
@@ -124,18 +137,9 @@ impl Plugin for VoxelAoPlugin {
                 Core3d,
                 (
                     node::voxel_pass.in_set(DynamicAoSystems::FarField),
-                    show::show_voxels_pass
-                        .in_set(DynamicAoSystems::Debug)
-                        // Drawn over the AO debug view too.
-                        .after(crate::compose::node::debug_view_pass),
+                    show::show_voxels_pass.in_set(DynamicAoSystems::DebugOverlay),
                 ),
             );
-    }
-
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
-            return;
-        };
         render_app
             .init_gpu_resource::<VoxelPipelines>()
             .init_gpu_resource::<show::ShowVoxelsPipeline>();

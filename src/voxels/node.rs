@@ -14,7 +14,7 @@ use bevy::render::{
 use super::render::{VoxelBindGroups, VoxelBuffers, VoxelPipelines};
 use crate::dispatch::{ComputeStep, record_passes};
 use crate::filter::BlurPipelines;
-use crate::view::DynamicAoUniform;
+use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, PendingPasses};
 
 /// Most workgroups along one dispatch dimension (WebGPU's guaranteed limit).
 const MAX_WORKGROUPS: u32 = 65535;
@@ -105,4 +105,21 @@ pub(crate) fn voxel_pass(
         })
         .collect();
     record_passes(&mut ctx, "dynamic_ao_voxel_filter", false, &steps);
+}
+
+/// A view with voxel volumes counts their passes until they have compiled.
+pub(crate) fn wait_for_voxels(
+    pipeline_cache: Res<PipelineCache>,
+    pipelines: Res<VoxelPipelines>,
+    blur: Res<BlurPipelines>,
+    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
+) {
+    let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
+    let all_ready =
+        ready(pipelines.voxelize) && ready(pipelines.sample) && blur.two.ready(&pipeline_cache);
+    for (view, mut pending) in &mut views {
+        if view.has(FarTerm::Voxels) {
+            pending.wait_for(all_ready);
+        }
+    }
 }

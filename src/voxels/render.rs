@@ -25,8 +25,9 @@ use bytemuck::Zeroable;
 
 use super::component::{VoxelGridReadback, grid_words};
 use super::gather::{GpuVolume, GridTriangle, VoxelFrame};
+use super::view::VoxelTextures;
 use crate::filter::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 /// Counts of this frame's buffers (`VoxelParams` in `voxel_grid.wgsl`).
 #[derive(ShaderType, Clone, Copy, Debug, Default)]
@@ -300,6 +301,8 @@ pub(crate) fn prepare_voxel_bind_groups(
         Entity,
         &DynamicAoView,
         &DynamicAoTextures,
+        Option<&VoxelTextures>,
+        &FarFieldOutputs,
         &ViewPrepassTextures,
     )>,
 ) {
@@ -327,11 +330,11 @@ pub(crate) fn prepare_voxel_bind_groups(
     else {
         return;
     };
-    for (entity, view, textures, prepass) in &views {
-        let (true, Some(low), Some(full), Some(depth), Some(normal)) = (
-            view.voxels,
-            textures.voxel_low.as_ref(),
-            textures.voxel_occlusion.as_ref(),
+    for (entity, view, textures, voxel_textures, outputs, prepass) in &views {
+        let (true, Some(voxel_textures), Some(full), Some(depth), Some(normal)) = (
+            view.has(FarTerm::Voxels),
+            voxel_textures,
+            outputs.get(FarTerm::Voxels),
             prepass.depth_view(),
             prepass.normal_view(),
         ) else {
@@ -347,7 +350,7 @@ pub(crate) fn prepare_voxel_bind_groups(
                 normal,
                 volumes.as_entire_binding(),
                 grid.as_entire_binding(),
-                &low.default_view,
+                &voxel_textures.low.default_view,
                 params.clone(),
                 settings_binding.clone(),
                 &textures.back_depth.default_view,
@@ -361,7 +364,7 @@ pub(crate) fn prepare_voxel_bind_groups(
                 settings_binding.clone(),
                 depth,
                 normal,
-                &low.default_view,
+                &voxel_textures.low.default_view,
                 &full.default_view,
             )),
         );
@@ -379,8 +382,8 @@ pub(crate) fn prepare_voxel_bind_groups(
                 )),
             )
         };
-        let scratch = &textures.voxel_scratch.as_ref().unwrap_or(full).default_view;
-        let blur = view.voxel_blur.then(|| {
+        let scratch = &voxel_textures.scratch.as_ref().unwrap_or(full).default_view;
+        let blur = voxel_textures.scratch.is_some().then(|| {
             (
                 blur_pass("dynamic_ao_voxel_blur_x", &full.default_view, scratch),
                 blur_pass("dynamic_ao_voxel_blur_y", scratch, &full.default_view),

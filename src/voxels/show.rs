@@ -16,7 +16,7 @@ use bevy::shader::Shader;
 use bevy::utils::default;
 
 use super::render::{VoxelBuffers, VoxelParams};
-use crate::view::DynamicAoView;
+use crate::view::{DynamicAoView, FarTerm};
 
 #[derive(Resource)]
 pub(crate) struct ShowVoxelsPipeline {
@@ -93,7 +93,7 @@ pub(crate) fn prepare_show_voxels(
     for (entity, view, target, prepass) in &views {
         let (true, true, Some(depth), Some(view_binding), Some((volumes, grid, params))) = (
             shown,
-            view.voxels,
+            view.has(FarTerm::Voxels),
             prepass.depth_view(),
             view_uniforms.uniforms.binding(),
             buffers.bindings(),
