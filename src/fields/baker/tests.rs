@@ -1,0 +1,295 @@
+use bevy::math::Affine3A;
+use bevy::prelude::*;
+
+use super::*;
+use crate::geometry::triangles::TriangleScene;
+
+fn cube() -> Vec<Triangle> {
+    let mut scene = TriangleScene::default();
+    scene.add_mesh(&Cuboid::new(1.0, 1.0, 1.0).into(), Affine3A::IDENTITY);
+    scene.triangles
+}
+
+/// Blocked fraction of all directions at `p`, by testing every triangle for each of many
+/// pseudo-random directions: no BVH, no shared direction set.
+fn brute_force(triangles: &[Triangle], p: Vec3, rays: u32) -> f32 {
+    let mut blocked = 0;
+    let mut state = 12345u32;
+    let mut next = || {
+        state = crate::geometry::hash::pcg_hash(state);
+        state as f32 / u32::MAX as f32
+    };
+    for _ in 0..rays {
+        let z = 2.0 * next() - 1.0;
+        let phi = std::f32::consts::TAU * next();
+        let r = (1.0 - z * z).sqrt();
+        let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let hit = triangles.iter().any(|t| {
+            let [a, b, c] = t.vertices;
+            let (e1, e2) = (b - a, c - a);
+            let h = d.cross(e2);
+            let det = e1.dot(h);
+            if det.abs() < 1e-9 {
+                return false;
+            }
+            let s = p - a;
+            let u = s.dot(h) / det;
+            let q = s.cross(e1);
+            let v = d.dot(q) / det;
+            u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(q) / det > 0.0
+        });
+        blocked += u32::from(hit);
+    }
+    blocked as f32 / rays as f32
+}
+
+#[test]
+fn extent_follows_equation_4() {
+    let (center, e) = grid_box(Vec3::splat(-0.5), Vec3::splat(0.5), 0.1);
+    assert_eq!(center, Vec3::ZERO);
+    // r = 0.5, A = 1: e = 0.5 + sqrt(1 / 0.4π) ≈ 1.392, about 3 r as the paper says.
+    assert!(
+        (e.x - 1.392).abs() < 1e-3 && e.x == e.y && e.y == e.z,
+        "{e}"
+    );
+    // An elongated box gets a grid that is relatively thinner along its long axis.
+    let (_, e) = grid_box(
+        Vec3::new(-1.0, -0.25, -0.25),
+        Vec3::new(1.0, 0.25, 0.25),
+        0.1,
+    );
+    assert!((e.x - (1.0 + (0.25f32 / (0.4 * std::f32::consts::PI)).sqrt())).abs() < 1e-4);
+    assert!(e.x / 1.0 < e.y / 0.25);
+}
+
+#[test]
+fn baked_values_match_a_brute_force_ray_cast() {
+    let settings = BakeSettings {
+        resolution: 8,
+        rays: 1024,
+        ..BakeSettings::paper()
+    }
+    .without_fixes();
+    let triangles = cube();
+    let field = bake(triangles.clone(), &settings, &|_, _| {}).unwrap();
+    let cell = 2.0 * field.half_extent / 8.0;
+    let mut compared = 0;
+    for (x, y, z) in [
+        (0, 0, 0),
+        (1, 3, 4),
+        (2, 4, 4),
+        (3, 7, 2),
+        (5, 5, 1),
+        (7, 4, 4),
+    ] {
+        let p = field.center - field.half_extent
+            + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell;
+        let expected = brute_force(&triangles, p, 4096);
+        let got = field.cells[field.index(x, y, z)][0];
+        // 1024 lattice rays against 4096 random ones: both within about 0.01 of the truth.
+        assert!(
+            (got - expected).abs() < 0.03,
+            "cell ({x},{y},{z}) at {p}: baked {got}, brute force {expected}"
+        );
+        compared += 1;
+    }
+    assert_eq!(compared, 6);
+    // Beside the cube on +x, the occluded directions point back at it.
+    let c = field.cells[field.index(7, 4, 4)];
+    assert!(c[1] < -0.9, "{c:?}");
+}
+
+#[test]
+fn border_rescale_leaves_no_step_at_the_boundary() {
+    let settings = BakeSettings {
+        resolution: 12,
+        rays: 256,
+        ..BakeSettings::paper()
+    };
+    let field = bake(cube(), &settings, &|_, _| {}).unwrap();
+    let r = field.resolution;
+    let mut boundary_max = 0.0f32;
+    let mut inner_max = 0.0f32;
+    for z in 0..r.z {
+        for y in 0..r.y {
+            for x in 0..r.x {
+                let a = field.cells[field.index(x, y, z)][0];
+                let edge = [x, y, z].iter().any(|&c| c == 0 || c == r.x - 1);
+                if edge {
+                    boundary_max = boundary_max.max(a);
+                } else {
+                    inner_max = inner_max.max(a);
+                }
+            }
+        }
+    }
+    // Outside the grid there is no occlusion, so the boundary must be 0 to meet it.
+    assert_eq!(boundary_max, 0.0);
+    assert!(
+        inner_max > 0.3,
+        "the contact occlusion must survive the rescale"
+    );
+    // Without the rescale the boundary holds the occlusion eq. 4 neglects, up to about ε.
+    let raw = bake(
+        cube(),
+        &BakeSettings {
+            rescale_border: false,
+            ..settings
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let raw_max = raw.cells.iter().map(|c| c[0]).fold(0.0f32, f32::max);
+    assert!(raw_max > 0.0);
+}
+
+#[test]
+fn interior_cells_take_their_open_neighbours_values() {
+    let settings = BakeSettings {
+        resolution: 8,
+        rays: 128,
+        rescale_border: false,
+        ..BakeSettings::paper()
+    };
+    let filled = bake(cube(), &settings, &|_, _| {}).unwrap();
+    let raw = bake(
+        cube(),
+        &BakeSettings {
+            fill_interior: false,
+            ..settings
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let inside: Vec<usize> = (0..raw.cells.len())
+        .filter(|&i| raw.cells[i][0] >= 1.0)
+        .collect();
+    assert!(!inside.is_empty(), "the cube should hold interior cells");
+    assert!(inside.iter().any(|&i| filled.cells[i][0] < 1.0));
+}
+
+#[test]
+fn bad_input_is_refused() {
+    assert_eq!(
+        bake(Vec::new(), &BakeSettings::default(), &|_, _| {}),
+        Err(BakeError::NoTriangles)
+    );
+    for settings in [
+        BakeSettings {
+            resolution: 1,
+            ..default()
+        },
+        BakeSettings {
+            reach: FieldReach::Unlimited { epsilon: 0.0 },
+            ..default()
+        },
+        BakeSettings {
+            reach: FieldReach::Distance {
+                reach: f32::NAN,
+                near: 0.5,
+            },
+            ..default()
+        },
+        BakeSettings {
+            rays: 0,
+            ..default()
+        },
+    ] {
+        assert!(matches!(
+            bake(cube(), &settings, &|_, _| {}),
+            Err(BakeError::BadSettings(_))
+        ));
+    }
+}
+
+#[test]
+fn a_finite_reach_counts_only_near_hits_and_ends_the_grid_where_nothing_reaches() {
+    let settings = BakeSettings {
+        resolution: 16,
+        rays: 512,
+        reach: FieldReach::Distance {
+            reach: 0.75,
+            near: 0.3,
+        },
+        ..default()
+    };
+    let field = bake(cube(), &settings, &|_, _| {}).unwrap();
+    assert_eq!((field.reach, field.near_reach), (0.75, 0.3));
+    // The grid is the cube's bounds grown by the reach.
+    assert!((field.half_extent - Vec3::splat(1.25)).abs().max_element() < 1e-5);
+    let r = field.resolution;
+    let cell = 2.0 * field.half_extent / r.as_vec3();
+    let at = |i: usize| {
+        let (x, y, z) = (
+            i as u32 % r.x,
+            (i as u32 / r.x) % r.y,
+            i as u32 / (r.x * r.y),
+        );
+        field.center - field.half_extent + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell
+    };
+    for (i, c) in field.cells.iter().enumerate() {
+        let p = at(i);
+        // Distance from the cube's surface (outside) of this grid point.
+        let outside = (p.abs() - Vec3::splat(0.5)).max(Vec3::ZERO).length();
+        if outside >= 0.75 {
+            assert_eq!(c[0], 0.0, "{p} lies beyond the reach");
+        }
+        let near = field.near_cells[i][0];
+        assert!(near <= c[0] + 1e-6, "the near part is part of the whole");
+        if outside >= 0.3 {
+            assert_eq!(near, 0.0, "{p} lies beyond the near reach");
+        }
+        // The signed distance is the distance to the surface, negative inside.
+        let [signed, ox, oy, oz] = field.distances[i];
+        let mean = Vec3::new(ox, oy, oz).length();
+        if p.abs().max_element() < 0.45 {
+            assert!(signed < 0.0, "{p} is inside: {signed}");
+        } else if outside > 0.05 && outside < 0.3 {
+            // The nearest of 512 rays: a little long where the nearest point is an edge.
+            assert!(
+                signed >= outside - 0.01 && signed < 1.15 * outside + 0.01,
+                "{p}: {signed} vs {outside}"
+            );
+        }
+        if near > 0.0 {
+            assert!(mean > 0.0 && mean < 0.3, "{mean}");
+        }
+    }
+    // Right beside a face, half the sphere is blocked within reach.
+    let beside = field
+        .cells
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| {
+            let p = at(*i);
+            (p.x - 0.55).abs() < 0.06 && p.y.abs() < 0.1 && p.z.abs() < 0.1
+        })
+        .map(|(_, c)| c[0])
+        .next()
+        .expect("a cell beside the +x face");
+    assert!((0.35..0.5).contains(&beside), "{beside}");
+}
+
+#[test]
+fn flat_objects_get_flat_grids_of_about_cubic_cells() {
+    let res = grid_resolution(Vec3::new(10.75, 0.75, 10.75), 32);
+    assert!(
+        res.y >= 4 && res.y <= 8 && res.x == res.z && res.x > 60,
+        "{res}"
+    );
+    let cube = grid_resolution(Vec3::splat(1.0), 32);
+    assert_eq!(cube, UVec3::splat(32));
+}
+
+#[test]
+fn baking_is_deterministic() {
+    let settings = BakeSettings {
+        resolution: 6,
+        rays: 64,
+        ..default()
+    };
+    assert_eq!(
+        bake(cube(), &settings, &|_, _| {}),
+        bake(cube(), &settings, &|_, _| {})
+    );
+}
