@@ -16,7 +16,7 @@
 #endif
 
 // The channels a texel of `input` carries.
-fn value(q: vec2<i32>) -> vec2<f32> {
+fn input_value(q: vec2<i32>) -> vec2<f32> {
 #ifdef TWO_CHANNELS
     return textureLoad(input, q, 0).rg;
 #else
@@ -57,7 +57,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         }
         let dz = (linear_depth(d) - z0) / z0 * settings.blur_sharpness;
         let w = exp(-f32(i * i) * falloff - dz * dz);
-        sum += w * value(q);
+        sum += w * input_value(q);
         weights += w;
     }
     textureStore(output, pixel, vec4<f32>(sum / weights, 0.0, 0.0));

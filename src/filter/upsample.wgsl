@@ -21,7 +21,7 @@
 #endif
 
 // The channels a texel of `low` carries.
-fn value(l: vec2<i32>) -> vec2<f32> {
+fn low_value(l: vec2<i32>) -> vec2<f32> {
 #ifdef TWO_CHANNELS
     return textureLoad(low, l, 0).rg;
 #else
@@ -49,7 +49,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = world_position(view, x, size, depth);
     let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
     let nearest = min(x / 2, low_dims - 1);
-    let v_x = value(nearest);
+    let v_x = low_value(nearest);
     let h_x = v_x.x + v_x.y;
     var sum = vec2<f32>(0.0);
     var weights = 0.0;
@@ -65,7 +65,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
             if dq <= 0.0 {
                 continue;
             }
-            let v_y = value(l);
+            let v_y = low_value(l);
             let h_y = v_y.x + v_y.y;
             let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
             let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), 2.0);

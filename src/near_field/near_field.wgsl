@@ -5,10 +5,10 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
 }
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
+#import bevy_dynamic_ao::math::PI
 #import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
 #import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
 
-const PI: f32 = 3.14159265358979;
 
 // A_ψ of the sphere standing for the surface sample seen at pixel `q` (depth and encoded normal
 // already read), as seen from receiver `p` with normal `n`.

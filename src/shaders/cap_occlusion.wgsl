@@ -10,7 +10,7 @@
 
 #define_import_path bevy_dynamic_ao::cap_occlusion
 
-const PI: f32 = 3.14159265358979;
+#import bevy_dynamic_ao::math::PI
 
 // σ ≤ π/2, given by its cosine; `cos_theta` is the cosine of the axis' angle from the normal.
 fn narrow_cap_occlusion(cos_sigma: f32, cos_theta: f32) -> f32 {

@@ -2,6 +2,7 @@
 
 #define_import_path bevy_dynamic_ao::math
 
+const PI: f32 = 3.14159265358979;
 const TAU: f32 = 6.28318530717958648;
 
 // Wendland's compactly supported kernel (Reinbothe et al. 2009, eq. 3): 1 at t = 0, falling
