@@ -444,6 +444,34 @@ pub(crate) fn view_texture(
     )
 }
 
+/// The system that makes the visibility buffer of far-field term `term` (full size,
+/// [`FAR_OCCLUSION_FORMAT`], drawn into) on every view it takes part in, and hands it to compose.
+pub(crate) fn prepare_far_visibility(
+    term: FarTerm,
+    label: &'static str,
+) -> impl FnMut(
+    ResMut<TextureCache>,
+    Res<RenderDevice>,
+    Query<(&ExtractedCamera, &DynamicAoView, &mut FarFieldOutputs)>,
+) {
+    move |mut texture_cache, render_device, mut views| {
+        for (camera, view, mut outputs) in &mut views {
+            if let (true, Some(size)) = (view.has(term), view_size(camera)) {
+                let usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
+                let texture = view_texture(
+                    &mut texture_cache,
+                    &render_device,
+                    label,
+                    size,
+                    FAR_OCCLUSION_FORMAT,
+                    usage,
+                );
+                outputs.set(term, texture);
+            }
+        }
+    }
+}
+
 fn prepare_view_textures(
     mut commands: Commands,
     mut texture_cache: ResMut<TextureCache>,

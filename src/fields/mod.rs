@@ -70,6 +70,7 @@ pub(crate) use render::FieldPipelines;
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
+use crate::view::{FarTerm, prepare_far_visibility};
 
 /// AO fields: the asset and its loader, baking on load, and the box pass.
 pub struct AoFieldPlugin;
@@ -105,7 +106,10 @@ impl Plugin for AoFieldPlugin {
             .add_systems(
                 Render,
                 (
-                    (render::write_field_buffers, view::prepare_field_visibility)
+                    (
+                        render::write_field_buffers,
+                        prepare_far_visibility(FarTerm::Fields, "dynamic_ao_field_visibility"),
+                    )
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_fields.in_set(DynamicAoPrepare::Readiness),
                     render::prepare_field_bind_groups.in_set(RenderSystems::PrepareBindGroups),

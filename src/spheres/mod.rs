@@ -75,6 +75,7 @@ pub(crate) use splat::SplatPipeline;
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
+use crate::view::{FarTerm, prepare_far_visibility};
 
 /// Sphere occluders: clustering, per-frame refit, and the splat pass.
 pub struct SphereOccluderPlugin;
@@ -122,7 +123,10 @@ impl Plugin for SphereOccluderPlugin {
             .add_systems(
                 Render,
                 (
-                    (splat::write_sphere_buffer, view::prepare_sphere_visibility)
+                    (
+                        splat::write_sphere_buffer,
+                        prepare_far_visibility(FarTerm::Spheres, "dynamic_ao_sphere_visibility"),
+                    )
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_splat.in_set(DynamicAoPrepare::Readiness),
                     splat::prepare_splat_bind_groups.in_set(RenderSystems::PrepareBindGroups),
