@@ -52,7 +52,7 @@
 //!  Bevy prepass (front layer) ───────►  nd_buffer/  back faces: second ND-buffer layer
 //!                                        │
 //!                                        ▼
-//!                                     image_space.rs runs near_field/ | horizon/ | ray_march/
+//!                                     image_space/ runs near_field/ | horizon/ | ray_march/
 //!                                        │  (one pass, one shader per folder)
 //!  SphereOccluder ─► spheres/ refit ─►  spheres/  splat ───┐
 //!  AoField ────────► fields/ bake ────►  fields/   grid boxes ├─► FarFieldOutputs (view.rs)
@@ -67,6 +67,14 @@
 //!                                        ▼
 //!                                     Bevy PBR: ambient and indirect light × visibility
 //! ```
+//!
+//! Every technique folder names its files by role: `mod.rs` (docs and plugin), `component.rs`
+//! (what users put on an occluder), `settings.rs` (its part of [`DynamicAo`]), `systems.rs`
+//! (main-world systems), `buffers.rs` (its data extracted and uploaded every frame),
+//! `pipeline.rs` (pipelines and per-view bind groups), `node.rs` (its passes), `view.rs` (its
+//! per-view state) and its `.wgsl`. The image-space techniques share their pipeline and node in
+//! `image_space/`. The uniform every pass reads is `DynamicAoUniform`, in Rust (`view.rs`) and
+//! WGSL (`shaders/uniform.wgsl`) alike, each field named after the setting it comes from.
 //!
 //! Shared code has no rendering in it: [`geometry`] (rest meshes, skinning and morphing,
 //! triangles, BVH, closedness, hash) serves the techniques and [`reference`](mod@reference);
@@ -119,7 +127,7 @@ use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
 pub use settings::{
-    AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
+    AoBlur, AoPreset, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
     HorizonParams, NearFieldParams, RayMarchParams,
 };
 
@@ -129,8 +137,8 @@ pub mod prelude {
     pub use crate::fields::{AoField, AoFieldData};
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoPreset, AoQuality, AoTechnique, DynamicAo, FarFieldBlend, FieldShading,
-        HorizonMode, HorizonParams, NearFieldParams, RayMarchParams,
+        AoBlur, AoPreset, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
+        HorizonParams, NearFieldParams, RayMarchParams,
     };
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;
@@ -151,7 +159,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/nd_buffer.wgsl");
         load_shader_library!(app, "shaders/sampling.wgsl");
         load_shader_library!(app, "shaders/math.wgsl");
-        load_shader_library!(app, "shaders/settings.wgsl");
+        load_shader_library!(app, "shaders/uniform.wgsl");
         load_shader_library!(app, "shaders/image_space_bindings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
         load_shader_library!(app, "shaders/cap_occlusion.wgsl");

@@ -3,11 +3,24 @@
 //! All passes run in Bevy's [`Core3d`] schedule, once per camera that has a
 //! [`DynamicAo`](crate::DynamicAo) component.
 
-use bevy::app::App;
+use bevy::app::{App, PostUpdate};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::ecs::schedule::{IntoScheduleConfigs, SystemSet};
-use bevy::pbr::main_build_indirect_parameters;
-use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
+use bevy::pbr::{MeshPipelineSystems, main_build_indirect_parameters};
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
+use bevy::transform::TransformSystems;
+
+/// The plugin's main-world systems in `PostUpdate`, listed in the order they run.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DynamicAoUpdate {
+    /// Caches drop what they hold for meshes whose asset changed.
+    ForgetChangedMeshes,
+    /// Far-field occluders follow this frame: sphere proxies are refit, voxel volumes gather
+    /// their triangles, AO fields are loaded or baked.
+    Occluders,
+    /// Debug drawing of this frame's proxies.
+    Gizmos,
+}
 
 /// The passes of the plugin in the [`Core3d`] schedule, listed in the order they run.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -19,6 +32,8 @@ pub enum DynamicAoSystems {
     /// The far field: splats the spheres of sphere occluders, and draws the grid boxes of AO
     /// field occluders.
     FarField,
+    /// Joint bilateral upsampling of half-resolution occlusion to full resolution.
+    Upsample,
     /// Cross-bilateral blur of the occlusion.
     Filter,
     /// Combines the occlusion terms and writes visibility for Bevy's PBR lighting.
@@ -45,6 +60,31 @@ pub(crate) enum DynamicAoPrepare {
     Readiness,
     /// Our passes take over Bevy's SSAO texture on views where all have compiled.
     HandOver,
+    /// The bind groups of the passes.
+    BindGroups,
+    /// The bind groups of debug overlays.
+    OverlayBindGroups,
+}
+
+/// Pipelines built once, when the renderer starts.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum DynamicAoStartup {
+    /// Pipelines derived from Bevy's mesh pipeline (the back-face layer's).
+    MeshPipelines,
+}
+
+/// Orders the main-world systems; each plugin that adds some calls it, so that it also holds
+/// where that plugin is used without [`DynamicAoPlugin`](crate::DynamicAoPlugin).
+pub(crate) fn configure_update(app: &mut App) {
+    use DynamicAoUpdate::*;
+    app.configure_sets(
+        PostUpdate,
+        (ForgetChangedMeshes, Occluders, Gizmos)
+            .chain()
+            // Joints and meshes have their final world transforms of this frame: proxies are
+            // refit, triangles gathered and skinned or morphed meshes baked in this pose.
+            .after(TransformSystems::Propagate),
+    );
 }
 
 pub(crate) fn configure(app: &mut App) {
@@ -54,7 +94,8 @@ pub(crate) fn configure(app: &mut App) {
     use DynamicAoSystems::*;
     render_app.configure_sets(
         Core3d,
-        (BackFaces, NearField, FarField, Filter, Compose)
+        // At half resolution the blur runs on the upsampled, full-resolution AO.
+        (BackFaces, NearField, FarField, Upsample, Filter, Compose)
             .chain()
             // The front layer is Bevy's prepass output.
             .after(Core3dSystems::Prepass)
@@ -86,5 +127,21 @@ pub(crate) fn configure(app: &mut App) {
             // which the hand-over removes before Bevy's pass would read it.
             .after(RenderSystems::Prepare)
             .before(RenderSystems::Render),
+    );
+    render_app.configure_sets(
+        Render,
+        (
+            DynamicAoPrepare::BindGroups,
+            DynamicAoPrepare::OverlayBindGroups,
+        )
+            .chain()
+            .in_set(RenderSystems::PrepareBindGroups),
+        // The occupied-voxel overlay and the voxel passes both use the voxel buffers, which the
+        // voxel bind groups may recreate: a fixed order instead of whichever the executor picks.
+    );
+    render_app.configure_sets(
+        RenderStartup,
+        // The back-face pipeline is built on Bevy's mesh pipeline and its layouts.
+        DynamicAoStartup::MeshPipelines.after(MeshPipelineSystems),
     );
 }

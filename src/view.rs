@@ -247,17 +247,19 @@ impl PendingPasses {
     }
 }
 
-/// The uniform every pass of a view reads.
+/// The uniform every pass of a view reads; `DynamicAoUniform` in `shaders/uniform.wgsl`, field
+/// for field. Each field is named after the [`DynamicAo`] setting it comes from.
 #[derive(Component, ShaderType, Clone, Copy, Debug, Default)]
 pub(crate) struct DynamicAoUniform {
     /// Reach of the image-space technique, metres: R, or the near-field radius where the far
     /// field counts the rest.
-    pub radius: f32,
+    pub image_space_radius: f32,
     pub intensity: f32,
-    pub max_samples: u32,
-    pub min_samples: u32,
-    /// 1 when the back-face layer takes part.
-    pub back_layer: u32,
+    /// [`crate::NearFieldParams`]; `near_field_back_layer` is 1 when the back-face layer
+    /// occludes.
+    pub near_field_max_samples: u32,
+    pub near_field_min_samples: u32,
+    pub near_field_back_layer: u32,
     /// 1 when an image-space technique (near field, horizon or ray march) is on.
     pub image_space: u32,
     /// Blur half-width, pixels (0 = off).
@@ -272,9 +274,9 @@ pub(crate) struct DynamicAoUniform {
     pub horizon_contrast: f32,
     pub horizon_mode: u32,
     /// Ray-marched reference parameters (see [`crate::RayMarchParams`]).
-    pub ray_directions: u32,
-    pub ray_elevations: u32,
-    pub ray_steps: u32,
+    pub ray_march_directions: u32,
+    pub ray_march_elevations: u32,
+    pub ray_march_steps: u32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
     /// 1 when sphere occluders take part.
@@ -285,12 +287,12 @@ pub(crate) struct DynamicAoUniform {
     pub fields: u32,
     /// 1 when voxel volumes take part.
     pub voxels: u32,
-    /// R, metres: every far-field term counts occluders within this distance.
-    pub far_radius: f32,
-    /// Under [`crate::FarFieldBlend::CountOnce`] with an image-space technique: the near field's
-    /// reach, metres; far-field terms leave out the occluders within it that the ND-buffer holds.
-    /// 0 where the far field counts every occluder.
-    pub far_near_radius: f32,
+    /// R ([`DynamicAo::radius`]), metres: every far-field term counts occluders within it.
+    pub radius: f32,
+    /// Under [`crate::FarFieldBlend::CountOnce`] with an image-space technique:
+    /// [`DynamicAo::near_field_radius`], metres; far-field terms leave out the occluders within
+    /// it that the ND-buffer holds. 0 where the far field counts every occluder.
+    pub near_field_radius: f32,
     /// 1 when the back-face layer is drawn: the ND-buffer holds the first solid interval of each
     /// pixel, front layer to back layer, not only the front surface.
     pub seen_back_layer: u32,
@@ -323,7 +325,7 @@ fn extract_views(
             )>();
             continue;
         }
-        let params = ao.quality.params();
+        let params = ao.near_field.sanitized();
         let blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
         let image_space =
@@ -363,11 +365,11 @@ fn extract_views(
             FarFieldOutputs::default(),
             PendingPasses::default(),
             DynamicAoUniform {
-                radius: near_radius,
+                image_space_radius: near_radius,
                 intensity: ao.effective_intensity(),
-                max_samples: params.max_samples,
-                min_samples: params.min_samples,
-                back_layer: u32::from(params.back_layer),
+                near_field_max_samples: params.max_samples,
+                near_field_min_samples: params.min_samples,
+                near_field_back_layer: u32::from(params.back_layer),
                 image_space: u32::from(image_space),
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,
@@ -377,16 +379,16 @@ fn extract_views(
                 horizon_attenuation: horizon.attenuation,
                 horizon_contrast: horizon.contrast,
                 horizon_mode: horizon.mode.shader_index(),
-                ray_directions: rays.directions,
-                ray_elevations: rays.rays_per_direction,
-                ray_steps: rays.steps,
+                ray_march_directions: rays.directions,
+                ray_march_elevations: rays.elevations,
+                ray_march_steps: rays.steps,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),
                 voxels: u32::from(voxels),
-                far_radius: radius,
-                far_near_radius: if count_once { near_radius } else { 0.0 },
+                radius,
+                near_field_radius: if count_once { near_radius } else { 0.0 },
                 seen_back_layer: u32::from(back_layer),
             },
         ));

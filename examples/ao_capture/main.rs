@@ -192,7 +192,9 @@ fn scene_ready(
         Msaa::Off,
         DynamicAo {
             technique: options.technique,
-            quality: options.preset,
+            near_field: options.preset.near_field(),
+            horizon: options.preset.horizon(),
+            ray_march: options.preset.ray_march(),
             radius: options.radius,
             blur: AoBlur {
                 radius: options.blur,

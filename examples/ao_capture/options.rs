@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use bevy_dynamic_ao::voxels::VoxelFalloff;
-use bevy_dynamic_ao::{AoBlur, AoQuality, AoTechnique, FarFieldBlend};
+use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, FarFieldBlend};
 
 use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
@@ -64,7 +64,8 @@ pub struct Options {
     pub far_blend: FarFieldBlend,
     /// Distance falloff of the voxel volume's hits.
     pub voxel_falloff: VoxelFalloff,
-    pub preset: AoQuality,
+    /// The level of every technique's sample budget.
+    pub preset: AoPreset,
     /// Half-width of the cross-bilateral blur, pixels (0 = off).
     pub blur: u32,
     /// Compute the occlusion at half resolution and upsample it.
@@ -92,7 +93,7 @@ impl Options {
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
         let (mut scene, mut width, mut height, mut radius, mut technique) =
             (None, None, None, None, None);
-        let (mut preset, mut frames, mut time) = (AoQuality::High, 4u32, 0.0f32);
+        let (mut preset, mut frames, mut time) = (AoPreset::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
         let mut far_blend = FarFieldBlend::default();
@@ -129,7 +130,7 @@ impl Options {
                 }
                 "--preset" => {
                     let name = value()?;
-                    preset = AoQuality::from_name(&name).ok_or(format!(
+                    preset = AoPreset::from_name(&name).ok_or(format!(
                         "unknown preset '{name}' (known: low, medium, high, ultra)"
                     ))?;
                 }

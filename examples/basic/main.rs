@@ -160,21 +160,22 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
             ao.debug_view = !ao.debug_view;
         }
         if keys.just_pressed(KeyCode::KeyL) {
-            let mut params = ao.quality.params();
-            params.back_layer = !params.back_layer;
-            ao.quality = AoQuality::Custom(params);
+            ao.near_field.back_layer = !ao.near_field.back_layer;
         }
-        for (key, quality) in [
+        for (key, preset) in [
             KeyCode::Digit1,
             KeyCode::Digit2,
             KeyCode::Digit3,
             KeyCode::Digit4,
         ]
         .into_iter()
-        .zip(AoQuality::PRESETS)
+        .zip(AoPreset::ALL)
         {
             if keys.just_pressed(key) {
-                ao.quality = quality;
+                *ao = DynamicAo {
+                    debug_view: ao.debug_view,
+                    ..DynamicAo::from_preset(preset)
+                };
             }
         }
     }
@@ -184,12 +185,11 @@ fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<Hel
     let (Ok(ao), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
         return;
     };
-    let params = ao.quality.params();
+    let params = ao.near_field;
     text.0 = format!(
-        "AO: {} | preset {} ({} samples, back layer {}) | radius {:.2} m | blur {} px | half res {} | debug view {}\n\
+        "AO: {} | near field {} samples, back layer {} | radius {:.2} m | blur {} px | half res {} | debug view {}\n\
          Space AO on/off  T technique  B Bevy SSAO  D debug view  1-4 presets  L back layer  F blur  H half res  Esc quit",
         ao.technique.name(),
-        ao.quality.name(),
         params.max_samples,
         if params.back_layer { "on" } else { "off" },
         ao.radius,

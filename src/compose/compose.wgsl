@@ -17,9 +17,9 @@
 // independent occluder. `Add` adds the near and far terms and clamps
 // (Shanmugam & Arikan 2007, §6); `Max` takes the larger.
 
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 
-@group(0) @binding(0) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(0) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
 @group(0) @binding(2) var sphere_visibility: texture_2d<f32>;
 @group(0) @binding(3) var field_visibility: texture_2d<f32>;
@@ -55,12 +55,12 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel = vec2<i32>(id.xy);
     var near = 0.0;
-    if settings.near_field != 0u {
+    if settings.image_space != 0u {
         near = clamp(textureLoad(near_occlusion, pixel, 0).r, 0.0, 1.0);
     }
     // Per channel: what the far-field occluders leave open.
     var open = vec2<f32>(1.0);
-    if settings.far_field != 0u {
+    if settings.spheres != 0u {
         let spheres = textureLoad(sphere_visibility, pixel, 0);
         open *= 1.0 - sphere_union(1.0 - spheres.rg, spheres.b, spheres.a);
     }
@@ -72,7 +72,7 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let far = 1.0 - clamp(open, vec2<f32>(0.0), vec2<f32>(1.0));
     var occlusion = near;
-    if settings.far_field != 0u || settings.fields != 0u || settings.voxels != 0u {
+    if settings.spheres != 0u || settings.fields != 0u || settings.voxels != 0u {
         let all_far = 1.0 - (1.0 - far.x) * (1.0 - far.y);
         switch settings.far_field_blend {
             case 0u: {

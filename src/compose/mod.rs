@@ -55,7 +55,7 @@ impl Plugin for ComposePlugin {
                         pipeline::prepare_compose_bind_groups,
                         debug_view::prepare_debug_view_bind_groups,
                     )
-                        .in_set(RenderSystems::PrepareBindGroups),
+                        .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(

@@ -30,7 +30,7 @@ pub enum AoField {
     /// in mesh units).
     Asset(Handle<AoFieldData>),
     /// Bake from the entity's own mesh, at its world scale, with these settings.
-    Bake(#[reflect(ignore)] BakeSettings),
+    Bake(BakeSettings),
 }
 
 impl Default for AoField {

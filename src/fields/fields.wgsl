@@ -15,7 +15,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::cap_occlusion::{cap_occlusion, share_beyond}
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 
 struct FieldInstance {
     // Unit cube [-1, 1]³ to world: places the grid box.
@@ -37,7 +37,7 @@ struct FieldInstance {
 @group(0) @binding(3) var front_depth: texture_depth_2d;
 @group(0) @binding(4) var front_normal: texture_2d<f32>;
 @group(0) @binding(5) var back_depth: texture_depth_2d;
-@group(0) @binding(6) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(6) var<uniform> settings: DynamicAoUniform;
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
@@ -148,7 +148,7 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     // Nothing on the object's own surface, fading in over the half cell next to it.
     let fade = smoothstep(0.0, field.params.x, s.signed_distance);
     let all = cone_occlusion(field, s.far.x, s.far.yzw, normal) * fade;
-    let near = settings.far_near_radius;
+    let near = settings.near_field_radius;
     if near <= 0.0 {
         return vec4<f32>(0.0, all, 0.0, 0.0);
     }

@@ -45,11 +45,12 @@
 //! or a [`VoxelAoVolume`](crate::voxels::VoxelAoVolume).
 
 pub mod baker;
+mod buffers;
 mod component;
 pub mod format;
 mod loader;
 mod node;
-mod render;
+mod pipeline;
 pub mod settings;
 mod systems;
 mod view;
@@ -66,10 +67,12 @@ pub use format::{AoFieldData, AoFieldError};
 pub use loader::AoFieldLoader;
 pub use systems::{ActiveAoField, PendingAoField};
 
-pub(crate) use render::FieldPipelines;
+pub(crate) use pipeline::FieldPipelines;
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
+use crate::schedule::{
+    self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
+};
 use crate::view::{FarTerm, prepare_far_visibility};
 
 /// AO fields: the asset and its loader, baking on load, and the box pass.
@@ -77,6 +80,7 @@ pub struct AoFieldPlugin;
 
 impl Plugin for AoFieldPlugin {
     fn build(&self, app: &mut App) {
+        schedule::configure_update(app);
         embedded_asset!(app, "fields.wgsl");
         app.init_asset::<AoFieldData>()
             .register_asset_loader(AoFieldLoader)
@@ -85,8 +89,7 @@ impl Plugin for AoFieldPlugin {
             .init_resource::<systems::BakedFields>()
             .add_systems(
                 PostUpdate,
-                // Skinned and morphed meshes are baked in their pose of this frame.
-                systems::resolve_fields.after(bevy::transform::TransformSystems::Propagate),
+                systems::resolve_fields.in_set(DynamicAoUpdate::Occluders),
             );
     }
 
@@ -95,11 +98,11 @@ impl Plugin for AoFieldPlugin {
             return;
         };
         render_app
-            .init_resource::<render::FieldBuffers>()
+            .init_resource::<buffers::FieldBuffers>()
             .add_systems(
                 ExtractSchedule,
                 (
-                    render::extract_fields,
+                    buffers::extract_fields,
                     view::note_field_occluders.in_set(DynamicAoExtract::Occluders),
                 ),
             )
@@ -107,12 +110,12 @@ impl Plugin for AoFieldPlugin {
                 Render,
                 (
                     (
-                        render::write_field_buffers,
+                        buffers::write_field_buffers,
                         prepare_far_visibility(FarTerm::Fields, "dynamic_ao_field_visibility"),
                     )
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_fields.in_set(DynamicAoPrepare::Readiness),
-                    render::prepare_field_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    pipeline::prepare_field_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(Core3d, node::field_pass.in_set(DynamicAoSystems::FarField));

@@ -11,7 +11,8 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use super::render::{FieldBindGroup, FieldBuffers, FieldPipelines};
+use super::buffers::FieldBuffers;
+use super::pipeline::{FieldBindGroup, FieldPipelines};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 pub(crate) fn field_pass(

@@ -4,7 +4,7 @@
 use bevy::ecs::prelude::*;
 use bevy::render::{Extract, render_resource::PipelineCache};
 
-use super::render::FieldPipelines;
+use super::pipeline::FieldPipelines;
 use super::systems::ActiveAoField;
 use crate::view::{DynamicAoView, FarTerm, FarTermsPresent, PendingPasses};
 

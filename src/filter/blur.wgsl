@@ -3,10 +3,10 @@
 // `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth: texture_depth_2d;
 @group(0) @binding(3) var input: texture_2d<f32>;
 #ifdef TWO_CHANNELS

@@ -22,7 +22,7 @@ use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
-use bevy::render::{GpuResourceAppExt, Render, RenderSystems, render_resource::PipelineCache};
+use bevy::render::{GpuResourceAppExt, Render, render_resource::PipelineCache};
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
@@ -48,16 +48,16 @@ impl Plugin for FilterPlugin {
             .add_systems(
                 Render,
                 (
-                    pipeline::prepare_blur_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    pipeline::prepare_blur_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                     wait_for_filter.in_set(DynamicAoPrepare::Readiness),
                 ),
             )
             .add_systems(
                 Core3d,
-                // At half resolution the blur runs on the upsampled, full-resolution AO.
-                (node::upsample_pass, node::blur_pass)
-                    .chain()
-                    .in_set(DynamicAoSystems::Filter),
+                (
+                    node::upsample_pass.in_set(DynamicAoSystems::Upsample),
+                    node::blur_pass.in_set(DynamicAoSystems::Filter),
+                ),
             );
     }
 }

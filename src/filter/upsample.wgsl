@@ -6,11 +6,11 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::math::wendland
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
 @group(0) @binding(4) var low: texture_2d<f32>;
@@ -69,7 +69,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
             let h_y = v_y.x + v_y.y;
             let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
             let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), 2.0);
-            let w_p = wendland(distance(p, world_position(view, y, size, dq)), settings.radius);
+            let w_p = wendland(distance(p, world_position(view, y, size, dq)), settings.image_space_radius);
             let w_h = wendland(abs(h_x - h_y), 1.0);
             let w = w_d * w_n * w_p * w_h;
             sum += w * v_y;

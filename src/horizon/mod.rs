@@ -10,6 +10,11 @@
 //!
 //! The whitepaper's low and high modes are named there but not spelled out; what they do here is
 //! documented on [`HorizonMode`](crate::settings::HorizonMode).
+//!
+//! This folder holds the technique's settings (`settings.rs`) and shader (`horizon.wgsl`). Its pass
+//! is shared with the other image-space techniques and lives in `src/image_space/`:
+//! `image_space/pipeline.rs` compiles this shader over the common layout,
+//! `image_space/node.rs` dispatches it; the common bindings are `shaders/image_space_bindings.wgsl`.
 
 pub mod settings;
 use bevy::app::{App, Plugin};

@@ -14,7 +14,7 @@ use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::schedule::IntoScheduleConfigs;
-use bevy::pbr::{MeshPipeline, MeshPipelineSystems};
+use bevy::pbr::MeshPipeline;
 use bevy::render::{
     ExtractSchedule, Render, RenderDebugFlags, RenderStartup, RenderSystems,
     render_phase::{AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system},
@@ -22,7 +22,7 @@ use bevy::render::{
 };
 
 use crate::capabilities;
-use crate::schedule::DynamicAoSystems;
+use crate::schedule::{DynamicAoStartup, DynamicAoSystems};
 pub use phase::BackFace3d;
 
 /// Registers the back-face phase, its pipeline and its pass.
@@ -46,8 +46,7 @@ impl Plugin for NdBufferPlugin {
             .add_render_command::<BackFace3d, phase::DrawBackFaces>()
             .add_systems(
                 RenderStartup,
-                // The back-face pipeline is built on Bevy's mesh pipeline and its layouts.
-                pipeline::init_back_face_pipeline.after(MeshPipelineSystems),
+                pipeline::init_back_face_pipeline.in_set(DynamicAoStartup::MeshPipelines),
             )
             .add_systems(ExtractSchedule, phase::extract_back_face_phases)
             .add_systems(

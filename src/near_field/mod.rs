@@ -21,6 +21,11 @@
 //! - **Combination.** Occlusions combine as 1 − Π(1 − A_ψ) instead of Σ A_ψ: the sum counts
 //!   occluders hidden behind one another again and again (the over-occlusion of §6). For small
 //!   A_ψ the two agree.
+//!
+//! This folder holds the technique's settings (`settings.rs`) and shader (`near_field.wgsl`). Its pass
+//! is shared with the other image-space techniques and lives in `src/image_space/`:
+//! `image_space/pipeline.rs` compiles this shader over the common layout,
+//! `image_space/node.rs` dispatches it; the common bindings are `shaders/image_space_bindings.wgsl`.
 
 pub mod settings;
 use bevy::app::{App, Plugin};

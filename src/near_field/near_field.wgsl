@@ -27,7 +27,7 @@ fn occluder(
     let position = world_position(view, q, size, depth);
     // Eq. 4 takes only occluders closer than r_far.
     let d = distance(position, p);
-    if d >= settings.radius {
+    if d >= settings.image_space_radius {
         return 0.0;
     }
     // A surface point below the receiver's tangent plane cannot occlude it. The push-back along
@@ -55,9 +55,9 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let p = world_position(view, pixel, size, r.depth);
 
     // r_far projected at the receiver, pixels; the sample count follows its area (fig. 4).
-    let radius_px = settings.radius / pixel_world_size(view, view_depth(view, p), size.y);
+    let radius_px = settings.image_space_radius / pixel_world_size(view, view_depth(view, p), size.y);
     let area = PI * radius_px * radius_px;
-    let count = clamp(u32(ceil(min(area, 4096.0))), settings.min_samples, settings.max_samples);
+    let count = clamp(u32(ceil(min(area, 4096.0))), settings.near_field_min_samples, settings.near_field_max_samples);
     // Each sample stands for area / count pixels; a sphere of that cross-section has a radius
     // of this many pixel sizes.
     let sphere_scale = radius_px / sqrt(f32(count));
@@ -73,7 +73,7 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
         }
         open *= 1.0 - occluder(q, textureLoad(front_depth, q, 0),
             textureLoad(front_normal, q, 0).xyz, size, p, n, sphere_scale);
-        if settings.back_layer != 0u {
+        if settings.near_field_back_layer != 0u {
             open *= 1.0 - occluder(q, textureLoad(back_depth, q, 0),
                 textureLoad(back_normal, q, 0).xyz, size, p, n, sphere_scale);
         }

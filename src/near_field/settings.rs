@@ -2,63 +2,10 @@
 
 use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
-/// Named parameter sets for the near-field pass, plus a custom form.
-#[derive(Reflect, Clone, Copy, Debug, Default, PartialEq)]
-#[reflect(Default, Clone, Debug, PartialEq)]
-pub enum AoQuality {
-    /// At most 8 samples per pixel and layer.
-    Low,
-    /// At most 16 samples per pixel and layer.
-    Medium,
-    /// At most 32 samples per pixel and layer.
-    #[default]
-    High,
-    /// At most 64 samples per pixel and layer.
-    Ultra,
-    /// Explicit parameters.
-    Custom(NearFieldParams),
-}
-
-impl AoQuality {
-    /// The presets in increasing cost.
-    pub const PRESETS: [AoQuality; 4] = [
-        AoQuality::Low,
-        AoQuality::Medium,
-        AoQuality::High,
-        AoQuality::Ultra,
-    ];
-
-    /// The near-field parameters this preset stands for.
-    pub fn params(&self) -> NearFieldParams {
-        let max_samples = match self {
-            AoQuality::Low => 8,
-            AoQuality::Medium => 16,
-            AoQuality::High => 32,
-            AoQuality::Ultra => 64,
-            AoQuality::Custom(params) => return params.sanitized(),
-        };
-        NearFieldParams {
-            max_samples,
-            ..NearFieldParams::default()
-        }
-    }
-
-    /// Lower-case name (`low`, `medium`, `high`, `ultra`, `custom`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            AoQuality::Low => "low",
-            AoQuality::Medium => "medium",
-            AoQuality::High => "high",
-            AoQuality::Ultra => "ultra",
-            AoQuality::Custom(_) => "custom",
-        }
-    }
-
-    /// The preset with this lower-case name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::PRESETS.into_iter().find(|q| q.name() == name)
-    }
-}
+/// Default most samples per receiver and layer (the budget of [`AoPreset::High`](crate::AoPreset::High)).
+pub const DEFAULT_MAX_SAMPLES: u32 = 32;
+/// Default fewest samples per receiver and layer.
+pub const DEFAULT_MIN_SAMPLES: u32 = 4;
 
 /// Parameters of the near-field pass (Shanmugam & Arikan 2007, §4.2).
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
@@ -66,10 +13,10 @@ impl AoQuality {
 pub struct NearFieldParams {
     /// Most neighbouring pixels gathered per receiver and layer. The count actually used
     /// scales with the projected r_far: one per pixel inside the projected disk at most
-    /// (S&A fig. 4). Valid: 1..=256. Default: 32 (the `High` preset).
+    /// (S&A fig. 4). Valid: 1..=256. Default: [`DEFAULT_MAX_SAMPLES`].
     pub max_samples: u32,
     /// Fewest neighbouring pixels gathered per receiver and layer, however small r_far
-    /// projects. Valid: 1..=max_samples. Default: 4.
+    /// projects. Valid: 1..=max_samples. Default: [`DEFAULT_MIN_SAMPLES`].
     pub min_samples: u32,
     /// Also gather occluders from the back-face layer (S&A §4.2: "the first two layers").
     /// Default: `true`.
@@ -79,16 +26,24 @@ pub struct NearFieldParams {
 impl Default for NearFieldParams {
     fn default() -> Self {
         Self {
-            max_samples: 32,
-            min_samples: 4,
+            max_samples: DEFAULT_MAX_SAMPLES,
+            min_samples: DEFAULT_MIN_SAMPLES,
             back_layer: true,
         }
     }
 }
 
 impl NearFieldParams {
-    /// Most samples a custom parameter set may ask for.
+    /// Most samples a parameter set may ask for.
     pub const MAX_SAMPLES: u32 = 256;
+
+    /// The default parameters with another sample budget.
+    pub fn with_max_samples(max_samples: u32) -> Self {
+        Self {
+            max_samples,
+            ..Self::default()
+        }
+    }
 
     /// The same parameters clamped into their valid ranges.
     pub fn sanitized(&self) -> Self {

@@ -1,13 +1,18 @@
 //! Ray-marched ambient occlusion through both ND-buffer layers: the in-engine reference
 //! (Bavoil & Sainz 2008, "Ray-Marched Ambient Occlusion").
 //!
-//! From each pixel, `directions × rays_per_direction` rays leave over the hemisphere around the
+//! From each pixel, `directions × elevations` rays leave over the hemisphere around the
 //! normal, stratified so that they follow the cosine weighting of the AO integral; each is
 //! marched in `steps` equal steps over the radius R. A step is blocked where it lies behind the
 //! front layer and in front of the back-face layer at the pixel it projects to (inside a solid),
 //! or, where no back face was drawn there, less than R behind the front layer. The occlusion is
 //! the fraction of blocked rays. Costly, but its error against ray-traced ground truth shrinks as
 //! the ray count grows. `reference::ray_march` is the CPU twin.
+//!
+//! This folder holds the technique's settings (`settings.rs`) and shader (`ray_march.wgsl`). Its pass
+//! is shared with the other image-space techniques and lives in `src/image_space/`:
+//! `image_space/pipeline.rs` compiles this shader over the common layout,
+//! `image_space/node.rs` dispatches it; the common bindings are `shaders/image_space_bindings.wgsl`.
 
 pub mod settings;
 use bevy::app::{App, Plugin};

@@ -51,12 +51,12 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let t1 = frame[0];
     let t2 = frame[1];
 
-    let radius = settings.radius;
+    let radius = settings.image_space_radius;
     let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x2c1b3c6du));
     let rotation = f32(hash) * HASH_TO_UNIT;
     let jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
-    let directions = settings.ray_directions;
-    let elevations = settings.ray_elevations;
+    let directions = settings.ray_march_directions;
+    let elevations = settings.ray_march_elevations;
     var hits = 0u;
     for (var i = 0u; i < directions; i++) {
         let phi = (f32(i) + rotation) * TAU / f32(directions);
@@ -66,8 +66,8 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
             let sin_theta = sqrt(u);
             let cos_theta = sqrt(1.0 - u);
             let dir = t1 * (sin_theta * cos(phi)) + t2 * (sin_theta * sin(phi)) + n * cos_theta;
-            for (var s = 0u; s < settings.ray_steps; s++) {
-                let t = (f32(s) + 0.5) / f32(settings.ray_steps) * radius;
+            for (var s = 0u; s < settings.ray_march_steps; s++) {
+                let t = (f32(s) + 0.5) / f32(settings.ray_march_steps) * radius;
                 let state = blocked(p + dir * t, size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);

@@ -3,7 +3,7 @@
 use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 /// Parameters of the ray-marched reference (Bavoil & Sainz 2008, "Ray-Marched Ambient
-/// Occlusion"): `directions × rays_per_direction` cosine-weighted rays around the normal, each
+/// Occlusion"): `directions × elevations` cosine-weighted rays around the normal, each
 /// marched in `steps` equal steps over the radius R ([`DynamicAo::radius`](crate::DynamicAo::radius)). A step is blocked
 /// where it lies behind the front layer and in front of the back-face layer (or, where no back
 /// face was drawn, less than R behind the front layer).
@@ -14,7 +14,7 @@ pub struct RayMarchParams {
     pub directions: u32,
     /// Elevations per azimuth, stratified for a cosine-weighted hemisphere. Valid: 1..=64.
     /// Default: 4.
-    pub rays_per_direction: u32,
+    pub elevations: u32,
     /// Samples per ray. Valid: 1..=64. Default: 8.
     pub steps: u32,
 }
@@ -23,7 +23,7 @@ impl Default for RayMarchParams {
     fn default() -> Self {
         Self {
             directions: 8,
-            rays_per_direction: 4,
+            elevations: 4,
             steps: 8,
         }
     }
@@ -34,7 +34,7 @@ impl RayMarchParams {
     pub fn sanitized(&self) -> Self {
         Self {
             directions: self.directions.clamp(1, 64),
-            rays_per_direction: self.rays_per_direction.clamp(1, 64),
+            elevations: self.elevations.clamp(1, 64),
             steps: self.steps.clamp(1, 64),
         }
     }

@@ -5,6 +5,7 @@
 //! compare what the GPU computed with the CPU [`reference`](crate::reference).
 
 mod node;
+mod pipeline;
 
 use bevy::app::{App, Plugin};
 use bevy::asset::{Assets, Handle, RenderAssetUsages, embedded_asset};
@@ -15,13 +16,13 @@ use bevy::image::Image;
 use bevy::math::UVec2;
 use bevy::reflect::Reflect;
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderSystems,
+    GpuResourceAppExt, Render,
     extract_component::{ExtractComponent, ExtractComponentPlugin},
     render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages},
 };
 
 use crate::capabilities;
-use crate::schedule::DynamicAoSystems;
+use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 
 /// Asks the plugin to copy this camera's AO buffer and both ND-buffer layers every frame.
 ///
@@ -79,10 +80,10 @@ impl Plugin for ReadbackPlugin {
             return;
         };
         render_app
-            .init_gpu_resource::<node::ReadbackPipeline>()
+            .init_gpu_resource::<pipeline::ReadbackPipeline>()
             .add_systems(
                 Render,
-                node::prepare_readback_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                pipeline::prepare_readback_bind_groups.in_set(DynamicAoPrepare::BindGroups),
             )
             .add_systems(Core3d, node::readback_pass.in_set(DynamicAoSystems::Debug));
     }

@@ -15,7 +15,7 @@ pub struct RayMarchInputs {
     /// Azimuths per pixel.
     pub directions: u32,
     /// Elevations per azimuth.
-    pub rays_per_direction: u32,
+    pub elevations: u32,
     /// Steps per ray.
     pub steps: u32,
 }
@@ -97,8 +97,8 @@ pub fn pixel_occlusion(
     let mut hits = 0u32;
     for i in 0..inputs.directions {
         let phi = (i as f32 + rotation) * std::f32::consts::TAU / inputs.directions as f32;
-        for j in 0..inputs.rays_per_direction {
-            let u = (j as f32 + jitter) / inputs.rays_per_direction as f32;
+        for j in 0..inputs.elevations {
+            let u = (j as f32 + jitter) / inputs.elevations as f32;
             let (sin_theta, cos_theta) = (u.sqrt(), (1.0 - u).sqrt());
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
             for s in 0..inputs.steps {
@@ -111,6 +111,6 @@ pub fn pixel_occlusion(
             }
         }
     }
-    let total = (inputs.directions * inputs.rays_per_direction) as f32;
+    let total = (inputs.directions * inputs.elevations) as f32;
     (inputs.intensity * hits as f32 / total).clamp(0.0, 1.0)
 }

@@ -34,12 +34,12 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 pub struct SphereOccluder {
     /// Most proxies per mesh. Boxes: a mesh gets as many as it needs to be filled to 3/4 by
     /// them, up to this. Spheres: Lloyd clusters, fewer where the mesh has fewer distinct
-    /// vertices. Units: N/A. Range 1 to [`SphereOccluder::MAX_COUNT`]. Default
-    /// [`SphereOccluder::DEFAULT_COUNT`].
+    /// vertices. No unit. Range 1 to [`SphereOccluder::MAX_COUNT`].
+    /// Default: [`SphereOccluder::DEFAULT_COUNT`].
     pub count: u32,
-    /// What the proxies are. Default [`ProxyShape::Boxes`].
+    /// What the proxies are. Default: [`ProxyShape::Boxes`].
     pub shape: ProxyShape,
-    /// How far a proxy's influence reaches. Default [`ProxyReach::CameraRadius`].
+    /// How far a proxy's influence reaches. Default: [`ProxyReach::CameraRadius`].
     pub reach: ProxyReach,
 }
 

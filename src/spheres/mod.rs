@@ -45,15 +45,16 @@
 //! Add [`SphereOccluder`] to a mesh entity or a scene root. The camera's
 //! [`DynamicAo::spheres`](crate::DynamicAo::spheres) switches the far field on or off per view.
 
+mod buffers;
 mod component;
 pub mod fit;
 #[cfg(feature = "gizmos")]
 mod gizmos;
 pub mod lloyd;
 mod node;
+mod pipeline;
 pub mod refit;
 
-mod splat;
 mod systems;
 mod view;
 
@@ -62,7 +63,6 @@ use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
 use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
-use bevy::transform::TransformSystems;
 
 pub use component::{
     OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, SphereOccluder, far_field_reach,
@@ -71,10 +71,12 @@ pub use component::{
 pub use gizmos::ShowOccluderSpheres;
 pub use systems::ASYNC_CLUSTERING_VERTICES;
 
-pub(crate) use splat::SplatPipeline;
+pub(crate) use pipeline::SplatPipeline;
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
+use crate::schedule::{
+    self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
+};
 use crate::view::{FarTerm, prepare_far_visibility};
 
 /// Sphere occluders: clustering, per-frame refit, and the splat pass.
@@ -86,6 +88,7 @@ pub struct RefitSpheres;
 
 impl Plugin for SphereOccluderPlugin {
     fn build(&self, app: &mut App) {
+        schedule::configure_update(app);
         embedded_asset!(app, "splat.wgsl");
         app.register_type::<SphereOccluder>()
             .register_type::<OccluderSpheres>()
@@ -94,17 +97,20 @@ impl Plugin for SphereOccluderPlugin {
             .init_resource::<systems::SphereCache>()
             .add_systems(
                 PostUpdate,
-                (systems::forget_changed_meshes, systems::refit_spheres)
-                    .chain()
-                    .in_set(RefitSpheres)
-                    // Joints and meshes have their final world transforms this frame.
-                    .after(TransformSystems::Propagate),
+                (
+                    systems::forget_changed_meshes.in_set(DynamicAoUpdate::ForgetChangedMeshes),
+                    systems::refit_spheres
+                        .in_set(RefitSpheres)
+                        .in_set(DynamicAoUpdate::Occluders),
+                ),
             );
         #[cfg(feature = "gizmos")]
         app.init_resource::<ShowOccluderSpheres>()
             .register_type::<ShowOccluderSpheres>()
-            // Draws the proxies of this frame's pose.
-            .add_systems(PostUpdate, gizmos::draw_spheres.after(RefitSpheres));
+            .add_systems(
+                PostUpdate,
+                gizmos::draw_spheres.in_set(DynamicAoUpdate::Gizmos),
+            );
     }
 
     fn finish(&self, app: &mut App) {
@@ -112,11 +118,11 @@ impl Plugin for SphereOccluderPlugin {
             return;
         };
         render_app
-            .init_resource::<splat::SphereBuffer>()
+            .init_resource::<buffers::SphereBuffer>()
             .add_systems(
                 ExtractSchedule,
                 (
-                    splat::extract_spheres,
+                    buffers::extract_spheres,
                     view::note_sphere_occluders.in_set(DynamicAoExtract::Occluders),
                 ),
             )
@@ -124,12 +130,12 @@ impl Plugin for SphereOccluderPlugin {
                 Render,
                 (
                     (
-                        splat::write_sphere_buffer,
+                        buffers::write_sphere_buffer,
                         prepare_far_visibility(FarTerm::Spheres, "dynamic_ao_sphere_visibility"),
                     )
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_splat.in_set(DynamicAoPrepare::Readiness),
-                    splat::prepare_splat_bind_groups.in_set(RenderSystems::PrepareBindGroups),
+                    pipeline::prepare_splat_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(Core3d, node::splat_pass.in_set(DynamicAoSystems::FarField));

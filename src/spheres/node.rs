@@ -11,7 +11,8 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use super::splat::{SphereBuffer, SplatBindGroup, SplatPipeline};
+use super::buffers::SphereBuffer;
+use super::pipeline::{SplatBindGroup, SplatPipeline};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 pub(crate) fn splat_pass(

@@ -10,7 +10,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::proxy_occlusion::{face_normal, face_occlusion, sphere_occlusion_within}
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::cap_occlusion::share_beyond
 
 struct Proxy {
@@ -28,7 +28,7 @@ struct Proxy {
 @group(0) @binding(2) var front_depth: texture_depth_2d;
 @group(0) @binding(3) var front_normal: texture_2d<f32>;
 @group(0) @binding(4) var back_depth: texture_depth_2d;
-@group(0) @binding(5) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(5) var<uniform> settings: DynamicAoUniform;
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
@@ -77,7 +77,7 @@ fn influence(proxy: Proxy) -> f32 {
     if proxy.kind.y > 0.0 {
         return proxy.kind.y;
     }
-    return proxy.centre_bound.w + settings.far_radius;
+    return proxy.centre_bound.w + settings.radius;
 }
 
 @vertex
@@ -122,7 +122,7 @@ fn seen_face(x: vec3<f32>, f: vec3<f32>) -> f32 {
 // join back into the whole as 1 − (1 − x)(1 − y)). Where the far field counts every occluder, y is
 // all of it.
 fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
-    let near = settings.far_near_radius;
+    let near = settings.near_field_radius;
     let tolerance = 0.1 * near;
     let centre = proxy.centre_bound.xyz;
     if proxy.kind.x != 0.0 {
@@ -196,7 +196,7 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     let proxy = proxies[in.proxy];
     let size = vec2<f32>(textureDimensions(front_depth));
     let p = world_position(view, pixel, size, depth);
-    var reach = settings.far_radius;
+    var reach = settings.radius;
     if proxy.kind.y > 0.0 {
         // Eq. 5: cut off beyond d_far, unlimited within.
         if distance(p, proxy.centre_bound.xyz) > proxy.kind.y {

@@ -5,7 +5,7 @@ use bevy::ecs::prelude::*;
 use bevy::render::{Extract, render_resource::PipelineCache};
 
 use super::component::OccluderSpheres;
-use super::splat::SplatPipeline;
+use super::pipeline::SplatPipeline;
 use crate::view::{DynamicAoView, FarTerm, FarTermsPresent, PendingPasses};
 
 pub(crate) fn note_sphere_occluders(

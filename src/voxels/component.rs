@@ -44,24 +44,28 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 #[require(bevy::transform::components::Transform)]
 pub struct VoxelAoVolume {
     /// Half the size of the box along the entity's local axes, metres (before the entity's
-    /// scale). Every component must be finite and positive. Default 2 m.
+    /// scale). Every component must be finite and positive.
+    /// Default: [`VoxelAoVolume::DEFAULT_HALF_EXTENTS`] (2 m).
     pub half_extents: Vec3,
     /// Voxels along each axis of the box (the grid has `resolution`³ cells). Useful range 64 to
-    /// 256; clamped into [`Self::MIN_RESOLUTION`]..=[`Self::MAX_RESOLUTION`]. Default 256.
+    /// 256; clamped into [`Self::MIN_RESOLUTION`]..=[`Self::MAX_RESOLUTION`].
+    /// Default: [`VoxelAoVolume::DEFAULT_RESOLUTION`] (256).
     pub resolution: u32,
-    /// Rays per pixel of the AO map. Clamped into 1..=[`Self::MAX_RAYS`]. Default 32.
+    /// Rays per pixel of the AO map. Clamped into 1..=[`Self::MAX_RAYS`].
+    /// Default: [`VoxelAoVolume::DEFAULT_RAYS`] (32).
     pub rays: u32,
     /// How a ray looks for occupied cells. Default: [`VoxelMarch::Cells`], every cell it
     /// crosses.
     pub march: VoxelMarch,
     /// Opening of the cone the rays fill, as a fraction of the hemisphere: 1 = the whole
     /// hemisphere (eq. 1), 0.5 = within 45° of the normal. Smaller is sharper and darker where
-    /// the occluder faces the surface. Range (0, 1]. Default 1.
+    /// the occluder faces the surface. Range (0, 1].
+    /// Default: [`VoxelAoVolume::DEFAULT_SPREAD`] (1).
     pub spread: f32,
-    /// Longest distance an occluder counts from, metres. `None` (the default): the radius of
-    /// the camera that renders the volume ([`DynamicAo::radius`](crate::DynamicAo::radius)), so
-    /// every camera measures within its own radius. `Some(d)` sets the paper's d_max for this
-    /// volume instead.
+    /// Longest distance an occluder counts from, metres. `None`: the radius of the camera that
+    /// renders the volume ([`DynamicAo::radius`](crate::DynamicAo::radius)), so every camera
+    /// measures within its own radius. `Some(d)` sets the paper's d_max for this volume
+    /// instead. Default: `None`.
     pub d_max: Option<f32>,
     /// How an occluder's weight falls off with its distance. Default: [`VoxelFalloff::None`],
     /// every hit within reach counts, as ground truth counts it.

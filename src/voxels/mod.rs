@@ -54,10 +54,11 @@
 //!
 //! [`ShowOccupiedVoxels`] on a volume draws its occupied cells over the image.
 
+mod buffers;
 mod component;
 mod gather;
 mod node;
-mod render;
+mod pipeline;
 mod show;
 mod view;
 
@@ -68,23 +69,25 @@ use bevy::ecs::prelude::*;
 use bevy::render::render_resource::SpecializedRenderPipelines;
 use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
 use bevy::shader::load_shader_library;
-use bevy::transform::TransformSystems;
 
 pub use component::{
     NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelFalloff, VoxelGridInfo,
     VoxelGridReadback, VoxelMarch, VoxelRays, VoxelVolumeError,
 };
 
-pub(crate) use render::VoxelPipelines;
+pub(crate) use pipeline::VoxelPipelines;
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
+use crate::schedule::{
+    self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
+};
 
 /// Voxel volumes: per-frame gathering, voxelization, sampling and the occupied-voxel view.
 pub struct VoxelAoPlugin;
 
 impl Plugin for VoxelAoPlugin {
     fn build(&self, app: &mut App) {
+        schedule::configure_update(app);
         load_shader_library!(app, "voxel_grid.wgsl");
         embedded_asset!(app, "voxelize.wgsl");
         embedded_asset!(app, "voxel_ao.wgsl");
@@ -98,10 +101,10 @@ impl Plugin for VoxelAoPlugin {
             .init_resource::<gather::VoxelMeshCache>()
             .add_systems(
                 PostUpdate,
-                (gather::forget_changed_meshes, gather::gather_triangles)
-                    .chain()
-                    // Joints and meshes have their final world transforms this frame.
-                    .after(TransformSystems::Propagate),
+                (
+                    gather::forget_changed_meshes.in_set(DynamicAoUpdate::ForgetChangedMeshes),
+                    gather::gather_triangles.in_set(DynamicAoUpdate::Occluders),
+                ),
             );
     }
 
@@ -110,27 +113,23 @@ impl Plugin for VoxelAoPlugin {
             return;
         };
         render_app
-            .init_resource::<render::VoxelBuffers>()
+            .init_resource::<buffers::VoxelBuffers>()
             .init_resource::<SpecializedRenderPipelines<show::ShowVoxelsPipeline>>()
             .add_systems(
                 ExtractSchedule,
                 (
-                    render::extract_voxels,
+                    buffers::extract_voxels,
                     view::note_voxel_volumes.in_set(DynamicAoExtract::Occluders),
                 ),
             )
             .add_systems(
                 Render,
                 (
-                    (render::write_voxel_buffers, view::prepare_voxel_textures)
+                    (buffers::write_voxel_buffers, view::prepare_voxel_textures)
                         .in_set(RenderSystems::PrepareResources),
                     node::wait_for_voxels.in_set(DynamicAoPrepare::Readiness),
-                    render::prepare_voxel_bind_groups.in_set(RenderSystems::PrepareBindGroups),
-                    show::prepare_show_voxels
-                        .in_set(RenderSystems::PrepareBindGroups)
-                        // Both use `VoxelBuffers`, which the other one writes (its voxelize bind
-                        // group): a fixed order instead of whichever the executor picks.
-                        .after(render::prepare_voxel_bind_groups),
+                    pipeline::prepare_voxel_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    show::prepare_show_voxels.in_set(DynamicAoPrepare::OverlayBindGroups),
                 ),
             )
             .add_systems(

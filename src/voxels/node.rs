@@ -11,7 +11,8 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use super::render::{VoxelBindGroups, VoxelBuffers, VoxelPipelines};
+use super::buffers::VoxelBuffers;
+use super::pipeline::{VoxelBindGroups, VoxelPipelines};
 use crate::dispatch::{ComputeStep, record_passes};
 use crate::filter::BlurPipelines;
 use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, PendingPasses};

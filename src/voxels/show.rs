@@ -15,7 +15,7 @@ use bevy::render::{
 use bevy::shader::Shader;
 use bevy::utils::default;
 
-use super::render::{VoxelBuffers, VoxelParams};
+use super::buffers::{VoxelBuffers, VoxelParams};
 use crate::view::{DynamicAoView, FarTerm};
 
 #[derive(Resource)]

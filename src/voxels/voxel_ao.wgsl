@@ -15,7 +15,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::sampling::pcg_hash
-#import bevy_dynamic_ao::settings::DynamicAoSettings
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::math::{tangent_frame, wendland}
 #import bevy_dynamic_ao::voxel_grid::{
     VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, to_grid, to_grid_direction,
@@ -29,7 +29,7 @@
 @group(0) @binding(4) var<storage, read> grid: array<u32>;
 @group(0) @binding(5) var output: texture_storage_2d<rg32float, write>;
 @group(0) @binding(6) var<uniform> params: VoxelParams;
-@group(0) @binding(7) var<uniform> settings: DynamicAoSettings;
+@group(0) @binding(7) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(8) var back_depth_texture: texture_depth_2d;
 
 fn occupied_cell(volume: VoxelVolume, c: vec3<i32>) -> bool {
@@ -113,7 +113,7 @@ fn first_hit_steps(volume: VoxelVolume, origin: vec3<f32>, direction: vec3<f32>,
 // The occlusion of one volume: x, by occluders within the near field's reach that the ND-buffer
 // does not hold; y, by the rest.
 fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> vec2<f32> {
-    let reach = select(settings.far_radius, volume.d_max, volume.d_max > 0.0);
+    let reach = select(settings.radius, volume.d_max, volume.d_max > 0.0);
     let g = to_grid(volume, p);
     let size = vec3<f32>(f32(volume.resolution));
     let margin = (reach + volume.bias) / volume.cell;
@@ -144,7 +144,7 @@ fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> vec2<f32
             continue;
         }
         let weight = select(wendland(t, reach), 1.0, (volume.flags & 2u) != 0u) * local.z;
-        if t < settings.far_near_radius {
+        if t < settings.near_field_radius {
             // The near field counts this occluder if the ND-buffer holds it.
             occlusion.x += weight * (1.0 - nd_buffer_holds(view, depth_texture,
                 back_depth_texture, settings.seen_back_layer != 0u, origin + direction * t,

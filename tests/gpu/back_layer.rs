@@ -22,10 +22,10 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
     let with_back = |back_layer| {
         DynamicAo::default()
             .with_radius(radius)
-            .with_quality(AoQuality::Custom(NearFieldParams {
+            .with_near_field(NearFieldParams {
                 back_layer,
                 ..default()
-            }))
+            })
     };
     let mut gpu = Gpu::new(&scene, with_back(true));
     let on = gpu.frame(4);

@@ -27,7 +27,7 @@ fn half_resolution_matches_the_cpu_and_stays_close_to_full_resolution() {
         let mask = half.geometry_mask();
 
         // The same steps on the CPU: the formula at every other pixel, the upsampling, the blur.
-        let params = half_ao.quality.params();
+        let params = half_ao.near_field.sanitized();
         let inputs = NearFieldInputs {
             radius,
             intensity: 1.0,

@@ -19,7 +19,7 @@ use crate::scenes;
 const BEVY_SSAO_RADIUS: f32 = 0.73;
 
 fn inputs(ao: &DynamicAo) -> NearFieldInputs {
-    let params = ao.quality.params();
+    let params = ao.near_field.sanitized();
     NearFieldInputs {
         radius: ao.radius,
         intensity: ao.intensity,
@@ -38,7 +38,7 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
     ] {
         // A wide blur, so the comparison covers the filter as much as the formula.
         let ao = DynamicAo::default()
-            .with_quality(AoQuality::Medium)
+            .with_near_field(AoPreset::Medium.near_field())
             .with_blur(AoBlur {
                 radius: 8,
                 ..default()
@@ -102,12 +102,12 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
         let mask = ours.geometry_mask();
         // The near-field sample budgets and the complete presets, for the README's table.
         let mut presets = String::new();
-        for quality in AoQuality::PRESETS {
-            gpu.set_ao(|ao| ao.quality = quality);
+        for preset in AoPreset::ALL {
+            gpu.set_ao(|ao| ao.near_field = preset.near_field());
             let frame = gpu.frame(2);
             presets += &format!(
                 " {} {:.4}",
-                quality.name(),
+                preset.name(),
                 rmse(&frame.visibility, &truth, Some(&mask))
             );
         }

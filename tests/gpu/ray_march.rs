@@ -14,14 +14,14 @@ use crate::scenes;
 fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
     let radius = 0.73;
     let scene = scenes::ball_near_wall();
-    let with = |directions, rays_per_direction| {
+    let with = |directions, elevations| {
         DynamicAo::default()
             .with_technique(AoTechnique::RayMarch)
             .with_radius(radius)
             .with_blur(AoBlur::OFF)
             .with_ray_march(RayMarchParams {
                 directions,
-                rays_per_direction,
+                elevations,
                 steps: 8,
             })
     };
@@ -35,7 +35,7 @@ fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
         radius,
         intensity: 1.0,
         directions: 2,
-        rays_per_direction: 1,
+        elevations: 1,
         steps: 8,
     };
     let cpu: Vec<f32> = ray_march_occlusion(&first.nd, &first.view, &inputs)

@@ -13,6 +13,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use bevy::math::{UVec3, Vec3};
+use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 use super::format::{AoFieldData, MAX_RESOLUTION};
 use crate::geometry::bvh::Bvh;
@@ -20,7 +21,8 @@ use crate::geometry::triangles::{Triangle, triangle_bounds};
 use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
 /// How far a field's occlusion reaches, which also sets its grid's extent.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub enum FieldReach {
     /// The radius of the cameras that show the field ([`DynamicAo::radius`](crate::DynamicAo::radius),
     /// the largest among them) and their near-field radius: the field is baked again, in the
@@ -43,30 +45,32 @@ pub enum FieldReach {
 }
 
 /// How to bake a field.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
 pub struct BakeSettings {
     /// Grid cells along the longest side of the grid box; the other sides get cells of about
-    /// the same size, within a budget of `resolution`³ cells. Range 2 to 256. Default 32.
+    /// the same size, within a budget of `resolution`³ cells. Range 2 to 256.
+    /// Default: [`BakeSettings::DEFAULT_RESOLUTION`] (32).
     pub resolution: u32,
-    /// How far occlusion counts. Default [`FieldReach::CameraRadius`].
+    /// How far occlusion counts. Default: [`FieldReach::CameraRadius`].
     pub reach: FieldReach,
-    /// Rays per grid point over the whole sphere. Default 256.
+    /// Rays per grid point over the whole sphere. Default: [`BakeSettings::DEFAULT_RAYS`] (256).
     pub rays: u32,
     /// Rescale values so the largest one on the grid's boundary becomes 0 (§3.4.1): no visible
-    /// edge where an unlimited field ends. It lowers every value up to 0.3. Default `false`: a
+    /// edge where an unlimited field ends. It lowers every value up to 0.3. Default: `false`: a
     /// field with a finite reach is 0 at its boundary already.
     pub rescale_border: bool,
     /// Replace fully occluded cells (inside the object) by the mean of their open neighbours
-    /// (§3.4.2). Default `false`: the lookup skips cells inside the object.
+    /// (§3.4.2). Default: `false`: the lookup skips cells inside the object.
     pub fill_interior: bool,
 }
 
 impl Default for BakeSettings {
     fn default() -> Self {
         Self {
-            resolution: 32,
+            resolution: Self::DEFAULT_RESOLUTION,
             reach: FieldReach::CameraRadius,
-            rays: 256,
+            rays: Self::DEFAULT_RAYS,
             rescale_border: false,
             fill_interior: false,
         }
@@ -74,6 +78,11 @@ impl Default for BakeSettings {
 }
 
 impl BakeSettings {
+    /// Default grid cells along the longest side.
+    pub const DEFAULT_RESOLUTION: u32 = 32;
+    /// Default rays per grid point.
+    pub const DEFAULT_RAYS: u32 = 256;
+
     #[cfg(test)]
     fn without_fixes(self) -> Self {
         Self {

@@ -10,8 +10,11 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 pub use crate::fields::settings::FieldShading;
 pub use crate::filter::settings::{AoBlur, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS};
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
-pub use crate::near_field::settings::{AoQuality, NearFieldParams};
+pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};
 pub use crate::ray_march::settings::RayMarchParams;
+pub use preset::AoPreset;
+
+mod preset;
 
 /// Default world-space AO radius r_far, in metres.
 pub const DEFAULT_RADIUS: f32 = 0.75;
@@ -35,8 +38,9 @@ pub const DEFAULT_INTENSITY: f32 = 1.0;
 pub struct DynamicAo {
     /// Which technique computes the occlusion. Default: [`AoTechnique::NearField`].
     pub technique: AoTechnique,
-    /// Sample budget of the near-field pass. Default: [`AoQuality::High`].
-    pub quality: AoQuality,
+    /// Parameters of [`AoTechnique::NearField`]: its sample budget and whether the back-face
+    /// layer occludes. Default: [`NearFieldParams::default`] (the budget of [`AoPreset::High`]).
+    pub near_field: NearFieldParams,
     /// R: the distance every term measures occlusion within. The result estimates what a ray
     /// tracer measures: the share of the cosine-weighted hemisphere whose rays hit geometry
     /// closer than R. Occluders farther than this are ignored by every technique (r_far of
@@ -100,7 +104,7 @@ impl Default for DynamicAo {
     fn default() -> Self {
         Self {
             technique: AoTechnique::default(),
-            quality: AoQuality::default(),
+            near_field: NearFieldParams::default(),
             radius: DEFAULT_RADIUS,
             near_field_radius: DEFAULT_NEAR_FIELD_RADIUS,
             intensity: DEFAULT_INTENSITY,
@@ -119,51 +123,21 @@ impl Default for DynamicAo {
 }
 
 impl DynamicAo {
-    /// A complete configuration: technique and parameters chosen together, from cheapest to
-    /// most accurate. The table in the README gives each one's cost and error.
-    pub fn from_preset(preset: AoPreset) -> Self {
-        let base = Self::default();
-        match preset {
-            AoPreset::Low => Self {
-                technique: AoTechnique::Horizon,
-                horizon: HorizonParams {
-                    directions: 4,
-                    steps: 4,
-                    mode: HorizonMode::Low,
-                    ..HorizonParams::default()
-                },
-                half_resolution: true,
-                ..base
-            },
-            AoPreset::Medium => Self {
-                technique: AoTechnique::Horizon,
-                horizon: HorizonParams {
-                    mode: HorizonMode::Low,
-                    ..HorizonParams::default()
-                },
-                ..base
-            },
-            AoPreset::High => Self {
-                technique: AoTechnique::NearField,
-                quality: AoQuality::High,
-                ..base
-            },
-            AoPreset::Ultra => Self {
-                technique: AoTechnique::RayMarch,
-                ..base
-            },
-        }
-    }
-
     /// The same settings with another technique.
     pub fn with_technique(mut self, technique: AoTechnique) -> Self {
         self.technique = technique;
         self
     }
 
-    /// The same settings with another quality preset.
-    pub fn with_quality(mut self, quality: AoQuality) -> Self {
-        self.quality = quality;
+    /// The same settings with other near-field parameters.
+    pub fn with_near_field(mut self, near_field: NearFieldParams) -> Self {
+        self.near_field = near_field;
+        self
+    }
+
+    /// The same settings with other horizon-based AO parameters.
+    pub fn with_horizon(mut self, horizon: HorizonParams) -> Self {
+        self.horizon = horizon;
         self
     }
 
@@ -210,40 +184,6 @@ impl DynamicAo {
             self.intensity
         } else {
             DEFAULT_INTENSITY
-        }
-    }
-}
-
-/// Complete configurations for [`DynamicAo::from_preset`].
-#[derive(Reflect, Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[reflect(Clone, Debug, PartialEq, Hash)]
-pub enum AoPreset {
-    /// Horizon-based AO, low mode, 4 directions × 4 steps, at half resolution.
-    Low,
-    /// Horizon-based AO, low mode, 8 directions × 8 steps, full resolution.
-    Medium,
-    /// Two-layer near-field AO, 32 samples per pixel and layer (the [`DynamicAo`] default).
-    High,
-    /// The ray-marched reference, 8 × 4 rays × 8 steps.
-    Ultra,
-}
-
-impl AoPreset {
-    /// Every preset, from cheapest to most accurate.
-    pub const ALL: [AoPreset; 4] = [
-        AoPreset::Low,
-        AoPreset::Medium,
-        AoPreset::High,
-        AoPreset::Ultra,
-    ];
-
-    /// Lower-case name (`low`, `medium`, `high`, `ultra`).
-    pub fn name(self) -> &'static str {
-        match self {
-            AoPreset::Low => "low",
-            AoPreset::Medium => "medium",
-            AoPreset::High => "high",
-            AoPreset::Ultra => "ultra",
         }
     }
 }
@@ -339,91 +279,6 @@ impl AoTechnique {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn defaults_match_the_documentation() {
-        let ao = DynamicAo::default();
-        assert_eq!(ao.radius, DEFAULT_RADIUS);
-        assert_eq!(ao.near_field_radius, DEFAULT_NEAR_FIELD_RADIUS);
-        assert_eq!(ao.far_field_blend, FarFieldBlend::CountOnce);
-        assert_eq!(ao.intensity, DEFAULT_INTENSITY);
-        assert_eq!(ao.technique, AoTechnique::NearField);
-        assert_eq!(ao.quality, AoQuality::High);
-        assert_eq!(AoQuality::High.params(), NearFieldParams::default());
-        assert_eq!(ao.blur.radius, DEFAULT_BLUR_RADIUS);
-        assert_eq!(ao.horizon, HorizonParams::default());
-        assert_eq!(ao.horizon.sanitized(), HorizonParams::default());
-        assert_eq!(ao.blur.sharpness, DEFAULT_BLUR_SHARPNESS);
-        assert!(!ao.debug_view);
-    }
-
-    #[test]
-    fn high_preset_is_the_default() {
-        assert_eq!(DynamicAo::from_preset(AoPreset::High), DynamicAo::default());
-        let techniques: Vec<AoTechnique> = AoPreset::ALL
-            .iter()
-            .map(|p| DynamicAo::from_preset(*p).technique)
-            .collect();
-        assert_eq!(
-            techniques,
-            [
-                AoTechnique::Horizon,
-                AoTechnique::Horizon,
-                AoTechnique::NearField,
-                AoTechnique::RayMarch
-            ]
-        );
-    }
-
-    #[test]
-    fn presets_grow_in_cost() {
-        let samples: Vec<u32> = AoQuality::PRESETS
-            .iter()
-            .map(|q| q.params().max_samples)
-            .collect();
-        assert!(samples.windows(2).all(|w| w[0] < w[1]), "{samples:?}");
-    }
-
-    #[test]
-    fn bad_values_fall_back() {
-        let ao = DynamicAo {
-            radius: f32::NAN,
-            intensity: -1.0,
-            ..default()
-        };
-        assert_eq!(ao.effective_radius(), DEFAULT_RADIUS);
-        assert_eq!(ao.effective_intensity(), DEFAULT_INTENSITY);
-        let p = AoQuality::Custom(NearFieldParams {
-            max_samples: 0,
-            min_samples: 99,
-            back_layer: false,
-        })
-        .params();
-        assert_eq!((p.max_samples, p.min_samples), (1, 1));
-        let blur = AoBlur {
-            radius: 99,
-            sharpness: f32::NAN,
-        }
-        .sanitized();
-        assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
-        assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
-    }
-
-    #[test]
-    fn names_round_trip() {
-        for (name, t) in AoTechnique::ALL {
-            assert_eq!(AoTechnique::from_name(name), Some(t));
-            assert_eq!(t.name(), name);
-        }
-        for q in AoQuality::PRESETS {
-            assert_eq!(AoQuality::from_name(q.name()), Some(q));
-        }
-        assert_eq!(AoTechnique::from_name("nope"), None);
-    }
-
-    fn default<T: Default>() -> T {
-        T::default()
-    }
-}
+mod documented_defaults;
+#[cfg(test)]
+mod tests;

@@ -1,73 +1,21 @@
-//! The pass that runs the image-space technique of each view: [`near_field`](crate::near_field),
-//! [`horizon`](crate::horizon) or [`ray_march`](crate::ray_march). All three read the same
-//! bindings (view, settings, both ND-buffer layers) and write the same occlusion buffer, so they
-//! share one layout, one bind group per view and one pass; only the shader differs.
+//! One compute pipeline per image-space technique over one layout, and the bind group of each
+//! view.
 
-use bevy::app::{App, Plugin};
-use bevy::core_pipeline::{prepass::ViewPrepassTextures, schedule::Core3d};
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderSystems,
-    camera::ExtractedCamera,
-    extract_component::{ComponentUniforms, DynamicUniformIndex},
+    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
-    renderer::{RenderContext, RenderDevice, ViewQuery},
-    view::{ViewUniform, ViewUniformOffset, ViewUniforms},
+    renderer::RenderDevice,
+    view::{ViewUniform, ViewUniforms},
 };
 use bevy::utils::default;
 
-use crate::capabilities;
-use crate::dispatch::{ComputeStep, record_passes};
-use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 use crate::settings::AoTechnique;
-use crate::view::{
-    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, PendingPasses,
-};
-
-/// Registers the shared pipelines, bind groups and pass of the image-space techniques.
-pub(crate) struct ImageSpacePlugin;
-
-impl Plugin for ImageSpacePlugin {
-    fn build(&self, _app: &mut App) {}
-
-    fn finish(&self, app: &mut App) {
-        let Some(render_app) = capabilities::render_app(app) else {
-            return;
-        };
-        render_app
-            .init_gpu_resource::<ImageSpacePipelines>()
-            .add_systems(
-                Render,
-                (
-                    prepare_image_space_bind_groups.in_set(RenderSystems::PrepareBindGroups),
-                    wait_for_image_space.in_set(DynamicAoPrepare::Readiness),
-                ),
-            )
-            .add_systems(Core3d, image_space_pass.in_set(DynamicAoSystems::NearField));
-    }
-}
-
-/// The view's image-space technique counts until its pipeline has compiled. `Off` has none to
-/// wait for; under Bevy's SSAO ours never take over.
-fn wait_for_image_space(
-    pipeline_cache: Res<PipelineCache>,
-    pipelines: Res<ImageSpacePipelines>,
-    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
-) {
-    for (view, mut pending) in &mut views {
-        let ready = match view.technique() {
-            AoTechnique::Off => true,
-            AoTechnique::BevySsao => false,
-            technique => pipelines
-                .pipeline(technique)
-                .is_some_and(|id| pipeline_cache.get_compute_pipeline(id).is_some()),
-        };
-        pending.wait_for(ready);
-    }
-}
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
 
 /// One compute pipeline per image-space technique, over one layout.
 #[derive(Resource)]
@@ -138,9 +86,9 @@ impl FromWorld for ImageSpacePipelines {
 }
 
 #[derive(Component)]
-pub(crate) struct ImageSpaceBindGroup(BindGroup);
+pub(crate) struct ImageSpaceBindGroup(pub(super) BindGroup);
 
-fn prepare_image_space_bind_groups(
+pub(super) fn prepare_image_space_bind_groups(
     mut commands: Commands,
     render_device: Res<RenderDevice>,
     pipelines: Res<ImageSpacePipelines>,
@@ -176,42 +124,4 @@ fn prepare_image_space_bind_groups(
             .entity(entity)
             .insert(ImageSpaceBindGroup(bind_group));
     }
-}
-
-fn image_space_pass(
-    view: ViewQuery<(
-        &ExtractedCamera,
-        &DynamicAoView,
-        &ImageSpaceBindGroup,
-        &ViewUniformOffset,
-        &DynamicUniformIndex<DynamicAoUniform>,
-    )>,
-    pipelines: Res<ImageSpacePipelines>,
-    pipeline_cache: Res<PipelineCache>,
-    mut ctx: RenderContext,
-) {
-    let (camera, ao_view, bind_group, view_offset, settings_index) = view.into_inner();
-    let (Some(size), Some(compute_pipeline)) = (
-        camera.physical_viewport_size,
-        pipelines
-            .pipeline(ao_view.technique())
-            .and_then(|id| pipeline_cache.get_compute_pipeline(id)),
-    ) else {
-        return;
-    };
-    let label = match ao_view.technique() {
-        AoTechnique::Horizon => "dynamic_ao_horizon",
-        AoTechnique::RayMarch => "dynamic_ao_ray_march",
-        _ => "dynamic_ao_near_field",
-    };
-    // One invocation per texel of the occlusion buffer (half size at half resolution).
-    let scale = if ao_view.half_resolution { 2 } else { 1 };
-    let step = ComputeStep {
-        label,
-        pipeline: compute_pipeline,
-        bind_group: &bind_group.0,
-        offsets: &[view_offset.offset, settings_index.index()],
-        texels: (size + (scale - 1)) / scale,
-    };
-    record_passes(&mut ctx, label, true, &[step]);
 }

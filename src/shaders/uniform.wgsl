@@ -1,17 +1,19 @@
-// The per-view uniform every pass reads; `view::DynamicAoUniform` on the Rust side.
+// The per-view uniform every pass reads; `view::DynamicAoUniform` on the Rust side, field for
+// field. Each field is named after the `DynamicAo` setting it comes from.
 
-#define_import_path bevy_dynamic_ao::settings
+#define_import_path bevy_dynamic_ao::uniform
 
-struct DynamicAoSettings {
+struct DynamicAoUniform {
     // Reach of the image-space technique, metres: R, or the near-field radius under CountOnce.
-    radius: f32,
+    image_space_radius: f32,
     intensity: f32,
-    max_samples: u32,
-    min_samples: u32,
-    // 1 when the back-face layer takes part.
-    back_layer: u32,
-    // 1 when an image-space term (near-field or horizon) is on.
-    near_field: u32,
+    // Near field: most and fewest samples per receiver and layer, 1 when the back-face layer
+    // occludes.
+    near_field_max_samples: u32,
+    near_field_min_samples: u32,
+    near_field_back_layer: u32,
+    // 1 when an image-space technique (near field, horizon or ray march) is on.
+    image_space: u32,
     // Cross-bilateral blur: half-width in pixels (0 = off) and depth sharpness (no unit).
     blur_radius: u32,
     blur_sharpness: f32,
@@ -23,14 +25,14 @@ struct DynamicAoSettings {
     horizon_contrast: f32,
     // 0 low, 1 normal, 2 high.
     horizon_mode: u32,
-    // Ray-marched reference: directions, rays per direction, steps per ray.
-    ray_directions: u32,
-    ray_elevations: u32,
-    ray_steps: u32,
+    // Ray-marched reference: directions, elevations per direction, steps per ray.
+    ray_march_directions: u32,
+    ray_march_elevations: u32,
+    ray_march_steps: u32,
     // 1 at full resolution, 2 at half resolution.
     resolution_scale: u32,
-    // 1 when the far field of sphere occluders takes part.
-    far_field: u32,
+    // 1 when sphere occluders take part.
+    spheres: u32,
     // 0: near + far, 1: max(near, far), 2: counted once, 1 − (1 − near)(1 − far).
     far_field_blend: u32,
     // 1 when AO field occluders take part.
@@ -38,10 +40,10 @@ struct DynamicAoSettings {
     // 1 when voxel volumes take part.
     voxels: u32,
     // R, metres: far-field terms count occluders within it.
-    far_radius: f32,
+    radius: f32,
     // The near field's reach under CountOnce, metres: far-field terms leave out the occluders
     // within it that the ND-buffer holds. 0 where the far field counts every occluder.
-    far_near_radius: f32,
+    near_field_radius: f32,
     // 1 when the back-face layer is drawn.
     seen_back_layer: u32,
 }

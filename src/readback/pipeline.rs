@@ -1,0 +1,119 @@
+//! The pipeline and bind groups of the read-back copy.
+
+use bevy::asset::load_embedded_asset;
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::log::warn_once;
+use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
+use bevy::render::{
+    camera::ExtractedCamera,
+    render_asset::RenderAssets,
+    render_resource::{
+        binding_types::{texture_2d, texture_depth_2d, texture_storage_2d},
+        *,
+    },
+    renderer::RenderDevice,
+    texture::GpuImage,
+};
+use bevy::utils::default;
+
+use super::AoReadback;
+use crate::view::DynamicAoTextures;
+
+#[derive(Resource)]
+pub(crate) struct ReadbackPipeline {
+    layout: BindGroupLayoutDescriptor,
+    pub(super) pipeline: CachedComputePipelineId,
+}
+
+impl FromWorld for ReadbackPipeline {
+    fn from_world(world: &mut World) -> Self {
+        let float = || texture_2d(TextureSampleType::Float { filterable: false });
+        let layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_readback_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    float(),
+                    texture_depth_2d(),
+                    float(),
+                    texture_depth_2d(),
+                    float(),
+                    texture_storage_2d(TextureFormat::R32Float, StorageTextureAccess::WriteOnly),
+                    texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                    texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                ),
+            ),
+        );
+        let pipeline =
+            world
+                .resource::<PipelineCache>()
+                .queue_compute_pipeline(ComputePipelineDescriptor {
+                    label: Some("dynamic_ao_readback_pipeline".into()),
+                    layout: vec![layout.clone()],
+                    shader: load_embedded_asset!(world, "readback.wgsl"),
+                    ..default()
+                });
+        Self { layout, pipeline }
+    }
+}
+
+#[derive(Component)]
+pub(crate) struct ReadbackBindGroup(pub(super) BindGroup);
+
+pub(crate) fn prepare_readback_bind_groups(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    pipeline: Res<ReadbackPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    images: Res<RenderAssets<GpuImage>>,
+    views: Query<(
+        Entity,
+        &AoReadback,
+        &DynamicAoTextures,
+        &ViewPrepassTextures,
+        &ScreenSpaceAmbientOcclusionResources,
+        &ExtractedCamera,
+    )>,
+) {
+    for (entity, readback, textures, prepass, ssao, camera) in &views {
+        let (Some(visibility), Some(front), Some(back)) = (
+            images.get(&readback.visibility),
+            images.get(&readback.front),
+            images.get(&readback.back),
+        ) else {
+            continue;
+        };
+        let (Some(depth), Some(normal), Some(size)) = (
+            prepass.depth_view(),
+            prepass.normal_view(),
+            camera.physical_viewport_size,
+        ) else {
+            continue;
+        };
+        if [visibility, front, back]
+            .iter()
+            .any(|image| image.size_2d() != size)
+        {
+            warn_once!("AoReadback images must have the camera's viewport size ({size}); skipping");
+            continue;
+        }
+        let bind_group = render_device.create_bind_group(
+            "dynamic_ao_readback_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipeline.layout),
+            &BindGroupEntries::sequential((
+                &ssao.screen_space_ambient_occlusion_texture.default_view,
+                depth,
+                normal,
+                &textures.back_depth.default_view,
+                &textures.back_normal.default_view,
+                &visibility.texture_view,
+                &front.texture_view,
+                &back.texture_view,
+            )),
+        );
+        commands
+            .entity(entity)
+            .insert(ReadbackBindGroup(bind_group));
+    }
+}

@@ -1,0 +1,92 @@
+use super::*;
+
+#[test]
+fn defaults_are_the_high_level() {
+    let ao = DynamicAo::default();
+    assert_eq!(ao.technique, AoTechnique::NearField);
+    assert_eq!(ao.near_field, AoPreset::High.near_field());
+    assert_eq!(ao.horizon, AoPreset::High.horizon());
+    assert_eq!(ao.ray_march, AoPreset::High.ray_march());
+    assert_eq!(ao.horizon.sanitized(), HorizonParams::default());
+    assert_eq!(AoPreset::default(), AoPreset::High);
+    assert_eq!(DynamicAo::from_preset(AoPreset::High), ao);
+}
+
+#[test]
+fn each_level_picks_its_technique() {
+    let picked: Vec<(AoTechnique, bool)> = AoPreset::ALL
+        .iter()
+        .map(|p| {
+            let ao = DynamicAo::from_preset(*p);
+            (ao.technique, ao.half_resolution)
+        })
+        .collect();
+    assert_eq!(
+        picked,
+        [
+            (AoTechnique::Horizon, true),
+            (AoTechnique::Horizon, false),
+            (AoTechnique::NearField, false),
+            (AoTechnique::RayMarch, false),
+        ]
+    );
+}
+
+#[test]
+fn levels_grow_in_cost() {
+    let samples: Vec<u32> = AoPreset::ALL
+        .iter()
+        .map(|p| p.near_field().max_samples)
+        .collect();
+    assert!(samples.windows(2).all(|w| w[0] < w[1]), "{samples:?}");
+    let horizon: Vec<(u32, u32)> = AoPreset::ALL
+        .iter()
+        .map(|p| {
+            let h = p.horizon();
+            (h.directions * h.steps, h.mode.shader_index())
+        })
+        .collect();
+    assert!(horizon.windows(2).all(|w| w[0] < w[1]), "{horizon:?}");
+}
+
+#[test]
+fn bad_values_fall_back() {
+    let ao = DynamicAo {
+        radius: f32::NAN,
+        intensity: -1.0,
+        ..default()
+    };
+    assert_eq!(ao.effective_radius(), DEFAULT_RADIUS);
+    assert_eq!(ao.effective_intensity(), DEFAULT_INTENSITY);
+    let p = NearFieldParams {
+        max_samples: 0,
+        min_samples: 99,
+        back_layer: false,
+    }
+    .sanitized();
+    assert_eq!((p.max_samples, p.min_samples), (1, 1));
+    let blur = AoBlur {
+        radius: 99,
+        sharpness: f32::NAN,
+    }
+    .sanitized();
+    assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
+    assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
+}
+
+#[test]
+fn names_round_trip() {
+    for (name, t) in AoTechnique::ALL {
+        assert_eq!(AoTechnique::from_name(name), Some(t));
+        assert_eq!(t.name(), name);
+    }
+    for p in AoPreset::ALL {
+        assert_eq!(AoPreset::from_name(p.name()), Some(p));
+    }
+    assert_eq!(AoTechnique::from_name("nope"), None);
+    assert_eq!(AoPreset::from_name("nope"), None);
+}
+
+fn default<T: Default>() -> T {
+    T::default()
+}

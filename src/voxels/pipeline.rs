@@ -1,0 +1,204 @@
+//! The pipelines of the voxelization and sampling passes and their per-view bind groups.
+
+use bevy::asset::load_embedded_asset;
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::render::{
+    extract_component::ComponentUniforms,
+    render_resource::{
+        binding_types::{
+            storage_buffer_read_only_sized, storage_buffer_sized, texture_2d, texture_depth_2d,
+            texture_storage_2d, uniform_buffer,
+        },
+        *,
+    },
+    renderer::RenderDevice,
+    view::{ViewUniform, ViewUniforms},
+};
+use bevy::utils::default;
+
+use super::buffers::{VoxelBuffers, VoxelParams};
+use super::view::VoxelTextures;
+use crate::filter::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
+
+/// The voxelization and sampling pipelines.
+#[derive(Resource)]
+pub(crate) struct VoxelPipelines {
+    voxelize_layout: BindGroupLayoutDescriptor,
+    sample_layout: BindGroupLayoutDescriptor,
+    pub voxelize: CachedComputePipelineId,
+    pub sample: CachedComputePipelineId,
+}
+
+impl FromWorld for VoxelPipelines {
+    fn from_world(world: &mut World) -> Self {
+        let voxelize_layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_voxelize_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_sized(false, None),
+                    uniform_buffer::<VoxelParams>(false),
+                ),
+            ),
+        );
+        let sample_layout = BindGroupLayoutDescriptor::new(
+            "dynamic_ao_voxel_ao_layout",
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                    storage_buffer_read_only_sized(false, None),
+                    storage_buffer_read_only_sized(false, None),
+                    texture_storage_2d(OCCLUSION_PAIR_FORMAT, StorageTextureAccess::WriteOnly),
+                    uniform_buffer::<VoxelParams>(false),
+                    uniform_buffer::<DynamicAoUniform>(true),
+                    texture_depth_2d(),
+                ),
+            ),
+        );
+        let cache = world.resource::<PipelineCache>();
+        let voxelize = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_voxelize_pipeline".into()),
+            layout: vec![voxelize_layout.clone()],
+            shader: load_embedded_asset!(world, "voxelize.wgsl"),
+            ..default()
+        });
+        let sample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_voxel_ao_pipeline".into()),
+            layout: vec![sample_layout.clone()],
+            shader: load_embedded_asset!(world, "voxel_ao.wgsl"),
+            ..default()
+        });
+        Self {
+            voxelize_layout,
+            sample_layout,
+            voxelize,
+            sample,
+        }
+    }
+}
+
+/// Per view: sampling into the half-size map, upsampling to full size, and the two blur passes.
+#[derive(Component)]
+pub(crate) struct VoxelBindGroups {
+    pub sample: BindGroup,
+    pub upsample: BindGroup,
+    /// X and Y passes; `None` when the blur is off.
+    pub blur: Option<(BindGroup, BindGroup)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_voxel_bind_groups(
+    mut commands: Commands,
+    render_device: Res<RenderDevice>,
+    mut buffers: ResMut<VoxelBuffers>,
+    pipelines: Res<VoxelPipelines>,
+    blur: Res<BlurPipelines>,
+    pipeline_cache: Res<PipelineCache>,
+    view_uniforms: Res<ViewUniforms>,
+    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    views: Query<(
+        Entity,
+        &DynamicAoView,
+        &DynamicAoTextures,
+        Option<&VoxelTextures>,
+        &FarFieldOutputs,
+        &ViewPrepassTextures,
+    )>,
+) {
+    let buffers = buffers.as_mut();
+    let (Some(triangles), Some(volumes), Some(params), Some(grid)) = (
+        buffers.triangles.buffer(),
+        buffers.volumes.buffer(),
+        buffers.params.binding(),
+        buffers.grid.as_ref(),
+    ) else {
+        return;
+    };
+    buffers.voxelize_bind_group = Some(render_device.create_bind_group(
+        "dynamic_ao_voxelize_bind_group",
+        &pipeline_cache.get_bind_group_layout(&pipelines.voxelize_layout),
+        &BindGroupEntries::sequential((
+            triangles.as_entire_binding(),
+            volumes.as_entire_binding(),
+            grid.as_entire_binding(),
+            params.clone(),
+        )),
+    ));
+    let (Some(view_binding), Some(settings_binding)) =
+        (view_uniforms.uniforms.binding(), settings.binding())
+    else {
+        return;
+    };
+    for (entity, view, textures, voxel_textures, outputs, prepass) in &views {
+        let (true, Some(voxel_textures), Some(full), Some(depth), Some(normal)) = (
+            view.has(FarTerm::Voxels),
+            voxel_textures,
+            outputs.get(FarTerm::Voxels),
+            prepass.depth_view(),
+            prepass.normal_view(),
+        ) else {
+            commands.entity(entity).remove::<VoxelBindGroups>();
+            continue;
+        };
+        let sample = render_device.create_bind_group(
+            "dynamic_ao_voxel_ao_bind_group",
+            &pipeline_cache.get_bind_group_layout(&pipelines.sample_layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                depth,
+                normal,
+                volumes.as_entire_binding(),
+                grid.as_entire_binding(),
+                &voxel_textures.low.default_view,
+                params.clone(),
+                settings_binding.clone(),
+                &textures.back_depth.default_view,
+            )),
+        );
+        let upsample = render_device.create_bind_group(
+            "dynamic_ao_voxel_upsample_bind_group",
+            &pipeline_cache.get_bind_group_layout(&blur.two.upsample_layout),
+            &BindGroupEntries::sequential((
+                view_binding.clone(),
+                settings_binding.clone(),
+                depth,
+                normal,
+                &voxel_textures.low.default_view,
+                &full.default_view,
+            )),
+        );
+        let blur_layout = pipeline_cache.get_bind_group_layout(&blur.two.layout);
+        let blur_pass = |label, input: &TextureView, output: &TextureView| {
+            render_device.create_bind_group(
+                label,
+                &blur_layout,
+                &BindGroupEntries::sequential((
+                    view_binding.clone(),
+                    settings_binding.clone(),
+                    depth,
+                    input,
+                    output,
+                )),
+            )
+        };
+        let scratch = &voxel_textures.scratch.as_ref().unwrap_or(full).default_view;
+        let blur = voxel_textures.scratch.is_some().then(|| {
+            (
+                blur_pass("dynamic_ao_voxel_blur_x", &full.default_view, scratch),
+                blur_pass("dynamic_ao_voxel_blur_y", scratch, &full.default_view),
+            )
+        });
+        commands.entity(entity).insert(VoxelBindGroups {
+            sample,
+            upsample,
+            blur,
+        });
+    }
+}
