@@ -6,7 +6,6 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
@@ -39,28 +38,18 @@ struct Spin;
 struct StartWithDebugView(bool);
 
 fn setup(world: &mut World) {
-    let target = common::camera_target(world);
     let debug_view = world.resource::<StartWithDebugView>().0;
-    let mut commands = world.commands();
-    let mut camera = commands.spawn((
-        Camera3d::default(),
-        Transform::from_xyz(-3.2, 2.6, 4.6).looking_at(Vec3::new(0.3, 0.6, 0.0), Vec3::Y),
-        Msaa::Off,
-        Tonemapping::AcesFitted,
+    common::spawn_ao_camera(
+        world,
+        Vec3::new(-3.2, 2.6, 4.6),
+        Vec3::new(0.3, 0.6, 0.0),
         DynamicAo {
             debug_view,
             ..default()
         },
-        AmbientLight {
-            brightness: 900.0,
-            ..default()
-        },
-    ));
-    if let Some(target) = target {
-        camera.insert(target);
-    }
-    common::spawn_help_line(&mut commands);
-    world.flush();
+        900.0,
+    );
+    let _commands = world.commands();
 
     let mut meshes = world.resource_mut::<Assets<Mesh>>();
     let floor = meshes.add(Plane3d::default().mesh().size(12.0, 12.0));

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::camera::RenderTarget;
+use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::FrameCount;
 use bevy::prelude::*;
 use bevy::render::{
@@ -152,6 +153,39 @@ pub fn example_app(title: &str, args: &ExampleArgs) -> App {
         .add_systems(Update, exit_on_escape);
     }
     app
+}
+
+/// Spawns an example's camera with `ao` on it: at `eye`, looking at `look_at`, with `Msaa::Off`
+/// (the plugin needs it), ACES tonemapping and ambient light of `ambient` brightness (the light
+/// AO darkens), rendering into the headless run's image when there is one; and the help line
+/// beside it. Returns the camera.
+pub fn spawn_ao_camera(
+    world: &mut World,
+    eye: Vec3,
+    look_at: Vec3,
+    ao: bevy_dynamic_ao::DynamicAo,
+    ambient: f32,
+) -> Entity {
+    let target = camera_target(world);
+    let mut commands = world.commands();
+    let mut camera = commands.spawn((
+        Camera3d::default(),
+        Transform::from_translation(eye).looking_at(look_at, Vec3::Y),
+        Msaa::Off,
+        Tonemapping::AcesFitted,
+        ao,
+        AmbientLight {
+            brightness: ambient,
+            ..default()
+        },
+    ));
+    if let Some(target) = target {
+        camera.insert(target);
+    }
+    let camera = camera.id();
+    spawn_help_line(&mut commands);
+    world.flush();
+    camera
 }
 
 /// Where a camera should render: an image in headless mode (`None` means the window).

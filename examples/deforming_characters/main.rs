@@ -12,7 +12,6 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::gltf::GltfAssetLabel;
 use bevy::prelude::*;
 use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
@@ -104,7 +103,6 @@ struct WalkAnimation {
 fn setup(world: &mut World) {
     let options = *world.resource::<Options>();
     world.resource_mut::<ShowOccluderSpheres>().0 = options.show_spheres;
-    let target = common::camera_target(world);
     let assets = world.resource::<AssetServer>().clone();
     let clip = assets.load(GltfAssetLabel::Animation(0).from_asset(WALKER));
     let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(WALKER));
@@ -116,28 +114,18 @@ fn setup(world: &mut World) {
         path: WALKER,
     });
 
-    let mut commands = world.commands();
-    let mut camera = commands.spawn((
-        Camera3d::default(),
-        Transform::from_xyz(0.0, 3.4, 6.4).looking_at(Vec3::new(0.0, 0.6, -0.4), Vec3::Y),
-        Msaa::Off,
-        Tonemapping::AcesFitted,
+    common::spawn_ao_camera(
+        world,
+        Vec3::new(0.0, 3.4, 6.4),
+        Vec3::new(0.0, 0.6, -0.4),
         DynamicAo {
             debug_view: options.debug_view,
             spheres: !options.voxels,
             voxels: options.voxels,
             ..default()
         },
-        AmbientLight {
-            brightness: 1200.0,
-            ..default()
-        },
-    ));
-    if let Some(target) = target {
-        camera.insert(target);
-    }
-    common::spawn_help_line(&mut commands);
-    world.flush();
+        1200.0,
+    );
 
     let mut meshes = world.resource_mut::<Assets<Mesh>>();
     let floor = meshes.add(Plane3d::default().mesh().size(14.0, 14.0));

@@ -11,7 +11,6 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::gltf::GltfAssetLabel;
 use bevy::prelude::*;
 use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
@@ -83,7 +82,6 @@ struct Circling {
 
 fn setup(world: &mut World) {
     let options = *world.resource::<Options>();
-    let target = common::camera_target(world);
     let assets = world.resource::<AssetServer>().clone();
     let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(SCENE));
     let clip = assets.load(GltfAssetLabel::Animation(0).from_asset(SCENE));
@@ -95,25 +93,17 @@ fn setup(world: &mut World) {
         path: SCENE,
     });
 
-    let mut commands = world.commands();
-    let mut camera = commands.spawn((
-        Camera3d::default(),
-        Transform::from_xyz(0.6, 2.2, 3.4).looking_at(Vec3::new(0.0, 0.8, 0.0), Vec3::Y),
-        Msaa::Off,
-        Tonemapping::AcesFitted,
+    common::spawn_ao_camera(
+        world,
+        Vec3::new(0.6, 2.2, 3.4),
+        Vec3::new(0.0, 0.8, 0.0),
         DynamicAo {
             debug_view: options.debug_view,
             ..default()
         },
-        AmbientLight {
-            brightness: 1000.0,
-            ..default()
-        },
-    ));
-    if let Some(target) = target {
-        camera.insert(target);
-    }
-    common::spawn_help_line(&mut commands);
+        1000.0,
+    );
+    let mut commands = world.commands();
     commands.spawn((
         DirectionalLight {
             illuminance: 2_500.0,

@@ -13,7 +13,7 @@ use bevy::render::{
 use bytemuck::Zeroable;
 
 use super::component::{VoxelGridReadback, grid_words};
-use super::gather::{GpuVolume, GridTriangle, VoxelFrame};
+use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
 
 /// Counts of this frame's buffers (`VoxelParams` in `voxel_grid.wgsl`).
 #[derive(ShaderType, Clone, Copy, Debug, Default)]

@@ -56,10 +56,12 @@
 
 mod buffers;
 mod component;
-mod gather;
+mod grid_data;
+mod mesh_cache;
 mod node;
 mod pipeline;
 mod show;
+mod systems;
 mod view;
 
 use bevy::app::{App, Plugin, PostUpdate};
@@ -97,13 +99,14 @@ impl Plugin for VoxelAoPlugin {
             .register_type::<VoxelMarch>()
             .register_type::<ShowOccupiedVoxels>()
             .register_type::<NotVoxelOccluder>()
-            .init_resource::<gather::VoxelFrame>()
-            .init_resource::<gather::VoxelMeshCache>()
+            .init_resource::<grid_data::VoxelFrame>()
+            .init_resource::<mesh_cache::VoxelMeshCache>()
             .add_systems(
                 PostUpdate,
                 (
-                    gather::forget_changed_meshes.in_set(DynamicAoUpdate::ForgetChangedMeshes),
-                    gather::gather_triangles.in_set(DynamicAoUpdate::Occluders),
+                    mesh_cache::forget_changed_meshes.in_set(DynamicAoUpdate::ForgetChangedMeshes),
+                    (systems::forget_removed_volumes, systems::gather_triangles)
+                        .in_set(DynamicAoUpdate::Occluders),
                 ),
             );
     }

@@ -6,7 +6,7 @@
 #import bevy_dynamic_ao::sampling::pcg_hash
 #import bevy_dynamic_ao::math::TAU
 
-// `voxels::gather::GpuVolume` on the Rust side.
+// `voxels::grid_data::GpuVolume` on the Rust side.
 struct VoxelVolume {
     // Rows of the world → grid affine map; cell (x, y, z) spans [x, x + 1]³.
     grid_from_world: array<vec4<f32>, 3>,
