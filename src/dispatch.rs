@@ -1,10 +1,14 @@
-//! Recording the plugin's compute passes: one helper, so that every pass gets its label, its
-//! debug group and its GPU time span the same way (`cargo bench --bench gpu_passes` reads the
-//! spans by these labels).
+//! Recording the plugin's passes: one helper for compute passes and one for the far field's
+//! draws, so that every pass gets its label, its debug group and its GPU time span the same way
+//! (`cargo bench --bench gpu_passes` reads the spans by these labels).
 
+use bevy::color::LinearRgba;
 use bevy::math::UVec2;
 use bevy::render::diagnostic::RecordDiagnostics;
-use bevy::render::render_resource::{BindGroup, ComputePassDescriptor, ComputePipeline};
+use bevy::render::render_resource::{
+    BindGroup, ComputePassDescriptor, ComputePipeline, LoadOp, Operations,
+    RenderPassColorAttachment, RenderPassDescriptor, RenderPipeline, StoreOp, TextureView,
+};
 use bevy::render::renderer::RenderContext;
 
 /// One compute pass: 8 × 8 workgroups over `texels`.
@@ -47,4 +51,51 @@ pub(crate) fn record_passes(
         encoder.pop_debug_group();
     }
     time_span.end(ctx.command_encoder());
+}
+
+/// One instanced draw: `vertices` per instance, `instances` of them.
+pub(crate) struct DrawStep<'a> {
+    pub pipeline: &'a RenderPipeline,
+    /// Bound at group 0 with `offsets`.
+    pub bind_group: &'a BindGroup,
+    pub offsets: &'a [u32],
+    pub vertices: u32,
+    pub instances: u32,
+}
+
+/// Records one render pass named `label` into `target`, cleared to `clear` first (even when
+/// there is nothing to draw, since compose reads the target whenever its term is on), inside a
+/// GPU time span of the same name.
+pub(crate) fn record_draw_pass(
+    ctx: &mut RenderContext,
+    label: &'static str,
+    target: &TextureView,
+    clear: LinearRgba,
+    step: Option<DrawStep>,
+) {
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: Operations {
+                load: LoadOp::Clear(clear.into()),
+                store: StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let pass_span = diagnostics.pass_span(&mut pass, label);
+    if let Some(step) = step.filter(|step| step.instances > 0) {
+        pass.set_render_pipeline(step.pipeline);
+        pass.set_bind_group(0, step.bind_group, step.offsets);
+        pass.draw(0..step.vertices, 0..step.instances);
+    }
+    pass_span.end(&mut pass);
 }

@@ -2,17 +2,15 @@
 
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    diagnostic::RecordDiagnostics,
     extract_component::DynamicUniformIndex,
-    render_resource::{
-        LoadOp, Operations, PipelineCache, RenderPassColorAttachment, RenderPassDescriptor, StoreOp,
-    },
+    render_resource::PipelineCache,
     renderer::{RenderContext, ViewQuery},
     view::ViewUniformOffset,
 };
 
 use super::buffers::FieldBuffers;
 use super::pipeline::{FieldBindGroup, FieldPipelines};
+use crate::dispatch::{DrawStep, record_draw_pass};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 pub(crate) fn field_pass(
@@ -33,39 +31,24 @@ pub(crate) fn field_pass(
     else {
         return;
     };
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    // Visibility starts at 1 (open) and each occluder multiplies it down; cleared even when no
-    // occluder is drawn, because compose reads it whenever fields are on.
-    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-        label: Some("dynamic_ao_fields"),
-        color_attachments: &[Some(RenderPassColorAttachment {
-            view: &visibility.default_view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: Operations {
-                load: LoadOp::Clear(bevy::color::LinearRgba::WHITE.into()),
-                store: StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_fields");
-    let pipeline = pipelines.for_shading(ao_view.settings.field_shading);
-    if buffers.count > 0
-        && let Some(bind_group) = bind_group
-        && let Some(render_pipeline) = pipeline_cache.get_render_pipeline(pipeline)
-    {
-        pass.set_render_pipeline(render_pipeline);
-        pass.set_bind_group(
-            0,
-            &bind_group.0,
-            &[view_offset.offset, settings_index.index()],
-        );
-        pass.draw(0..36, 0..buffers.count);
-    }
-    pass_span.end(&mut pass);
+    // Visibility starts at 1 (open) and each occluder multiplies it down.
+    let offsets = [view_offset.offset, settings_index.index()];
+    record_draw_pass(
+        &mut ctx,
+        "dynamic_ao_fields",
+        &visibility.default_view,
+        bevy::color::LinearRgba::WHITE,
+        bind_group
+            .zip(
+                pipeline_cache
+                    .get_render_pipeline(pipelines.for_shading(ao_view.settings.field_shading)),
+            )
+            .map(|(bind_group, pipeline)| DrawStep {
+                pipeline,
+                bind_group: &bind_group.0,
+                offsets: &offsets,
+                vertices: 36,
+                instances: buffers.count,
+            }),
+    );
 }

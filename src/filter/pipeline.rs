@@ -124,6 +124,68 @@ impl FromWorld for BlurPipelines {
     }
 }
 
+/// What every blur and upsampling pass of a view reads besides its occlusion buffers.
+pub(crate) struct FilterInputs<'a> {
+    pub view: BindingResource<'a>,
+    pub settings: BindingResource<'a>,
+    pub depth: &'a TextureView,
+}
+
+impl FilterPipelines {
+    /// The bind group of an upsampling pass: `low` (half size) into `full`.
+    pub fn upsample_bind_group(
+        &self,
+        device: &RenderDevice,
+        pipeline_cache: &PipelineCache,
+        label: &'static str,
+        inputs: &FilterInputs,
+        normal: &TextureView,
+        [low, full]: [&TextureView; 2],
+    ) -> BindGroup {
+        device.create_bind_group(
+            label,
+            &pipeline_cache.get_bind_group_layout(&self.upsample_layout),
+            &BindGroupEntries::sequential((
+                inputs.view.clone(),
+                inputs.settings.clone(),
+                inputs.depth,
+                normal,
+                low,
+                full,
+            )),
+        )
+    }
+
+    /// The bind groups of the two blur passes: X from `occlusion` into `scratch`, Y back.
+    pub fn blur_bind_groups(
+        &self,
+        device: &RenderDevice,
+        pipeline_cache: &PipelineCache,
+        [label_x, label_y]: [&'static str; 2],
+        inputs: &FilterInputs,
+        [occlusion, scratch]: [&TextureView; 2],
+    ) -> BlurBindGroups {
+        let layout = pipeline_cache.get_bind_group_layout(&self.layout);
+        let pass = |label, input: &TextureView, output: &TextureView| {
+            device.create_bind_group(
+                label,
+                &layout,
+                &BindGroupEntries::sequential((
+                    inputs.view.clone(),
+                    inputs.settings.clone(),
+                    inputs.depth,
+                    input,
+                    output,
+                )),
+            )
+        };
+        BlurBindGroups {
+            x: pass(label_x, occlusion, scratch),
+            y: pass(label_y, scratch, occlusion),
+        }
+    }
+}
+
 /// X pass: occlusion → scratch; Y pass: scratch → occlusion.
 #[derive(Component)]
 pub(crate) struct BlurBindGroups {
@@ -154,57 +216,51 @@ pub(crate) fn prepare_blur_bind_groups(
     else {
         return;
     };
-    let layout = pipeline_cache.get_bind_group_layout(&pipelines.one.layout);
-    let upsample_layout = pipeline_cache.get_bind_group_layout(&pipelines.one.upsample_layout);
     for (entity, textures, prepass, view) in &views {
-        match (
-            prepass.depth_view(),
-            prepass.normal_view(),
-            view.half_resolution,
-        ) {
-            (Some(depth), Some(normal), true) => {
-                let bind_group = render_device.create_bind_group(
-                    "dynamic_ao_upsample_bind_group",
-                    &upsample_layout,
-                    &BindGroupEntries::sequential((
-                        view_binding.clone(),
-                        settings_binding.clone(),
-                        depth,
+        let Some(depth) = prepass.depth_view() else {
+            commands
+                .entity(entity)
+                .remove::<(UpsampleBindGroup, BlurBindGroups)>();
+            continue;
+        };
+        let inputs = FilterInputs {
+            view: view_binding.clone(),
+            settings: settings_binding.clone(),
+            depth,
+        };
+        let occlusion = &textures.full_occlusion.default_view;
+        match prepass.normal_view().filter(|_| view.half_resolution) {
+            Some(normal) => {
+                commands.entity(entity).insert(UpsampleBindGroup(
+                    pipelines.one.upsample_bind_group(
+                        &render_device,
+                        &pipeline_cache,
+                        "dynamic_ao_upsample_bind_group",
+                        &inputs,
                         normal,
-                        &textures.near_occlusion.default_view,
-                        &textures.full_occlusion.default_view,
-                    )),
-                );
-                commands
-                    .entity(entity)
-                    .insert(UpsampleBindGroup(bind_group));
+                        [&textures.near_occlusion.default_view, occlusion],
+                    ),
+                ));
             }
-            _ => {
+            None => {
                 commands.entity(entity).remove::<UpsampleBindGroup>();
             }
         }
-        let Some(depth) = prepass.depth_view().filter(|_| view.blur_radius > 0) else {
+        if view.blur_radius == 0 {
             commands.entity(entity).remove::<BlurBindGroups>();
             continue;
-        };
-        let bind_group = |label, input: &TextureView, output: &TextureView| {
-            render_device.create_bind_group(
-                label,
-                &layout,
-                &BindGroupEntries::sequential((
-                    view_binding.clone(),
-                    settings_binding.clone(),
-                    depth,
-                    input,
-                    output,
-                )),
-            )
-        };
-        let occlusion = &textures.full_occlusion.default_view;
-        let scratch = &textures.blur_scratch.default_view;
-        commands.entity(entity).insert(BlurBindGroups {
-            x: bind_group("dynamic_ao_blur_x_bind_group", occlusion, scratch),
-            y: bind_group("dynamic_ao_blur_y_bind_group", scratch, occlusion),
-        });
+        }
+        commands
+            .entity(entity)
+            .insert(pipelines.one.blur_bind_groups(
+                &render_device,
+                &pipeline_cache,
+                [
+                    "dynamic_ao_blur_x_bind_group",
+                    "dynamic_ao_blur_y_bind_group",
+                ],
+                &inputs,
+                [occlusion, &textures.blur_scratch.default_view],
+            ));
     }
 }

@@ -40,8 +40,8 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let pixel = r.pixel;
     let size = r.size;
     let dims = vec2<i32>(size);
-    let p = view_position(pixel, size, r.depth);
-    let n = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
+    let p = r.view_position;
+    let n = r.view_normal;
     let radius = settings.image_space_radius;
     let radius_px = radius / pixel_world_size(view, -p.z, size.y);
     // Fewer steps where the radius covers fewer pixels: never two steps in one pixel.

@@ -45,8 +45,8 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let pixel = r.pixel;
     let size = r.size;
     let dims = vec2<i32>(size);
-    let p = view_position(pixel, size, r.depth);
-    let n = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
+    let p = r.view_position;
+    let n = r.view_normal;
     let frame = tangent_frame(n);
     let t1 = frame[0];
     let t2 = frame[1];

@@ -39,6 +39,9 @@ struct Receiver {
     depth: f32,
     // World-space unit normal of the front layer.
     normal: vec3<f32>,
+    // The same surface in view space: its position and unit normal.
+    view_position: vec3<f32>,
+    view_normal: vec3<f32>,
     // False where there is nothing to shade: outside the image, or background (already written
     // as open).
     shade: bool,
@@ -63,6 +66,8 @@ fn receiver(invocation: vec3<u32>) -> Receiver {
         textureStore(occlusion, r.out_pixel, vec4<f32>(0.0));
         return r;
     }
+    r.view_position = view_position(r.pixel, r.size, r.depth);
+    r.view_normal = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
     r.shade = true;
     return r;
 }

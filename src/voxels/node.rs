@@ -91,9 +91,9 @@ pub(crate) fn voxel_pass(
     record_passes(&mut ctx, "dynamic_ao_voxel_ao", false, &[sample_step]);
 
     let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
-    if let Some((x, y)) = &bind_groups.blur {
-        passes.push(("dynamic_ao_voxel_blur_x", blur_x, x));
-        passes.push(("dynamic_ao_voxel_blur_y", blur_y, y));
+    if let Some(groups) = &bind_groups.blur {
+        passes.push(("dynamic_ao_voxel_blur_x", blur_x, &groups.x));
+        passes.push(("dynamic_ao_voxel_blur_y", blur_y, &groups.y));
     }
     let steps: Vec<ComputeStep> = passes
         .into_iter()

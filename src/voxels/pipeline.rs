@@ -19,7 +19,7 @@ use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
 use super::view::VoxelTextures;
-use crate::filter::{BlurPipelines, OCCLUSION_PAIR_FORMAT};
+use crate::filter::{BlurBindGroups, BlurPipelines, FilterInputs, OCCLUSION_PAIR_FORMAT};
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 /// The voxelization and sampling pipelines.
@@ -90,7 +90,7 @@ pub(crate) struct VoxelBindGroups {
     pub sample: BindGroup,
     pub upsample: BindGroup,
     /// X and Y passes; `None` when the blur is off.
-    pub blur: Option<(BindGroup, BindGroup)>,
+    pub blur: Option<BlurBindGroups>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -162,37 +162,26 @@ pub(crate) fn prepare_voxel_bind_groups(
                 &textures.back_depth.default_view,
             )),
         );
-        let upsample = render_device.create_bind_group(
-            "dynamic_ao_voxel_upsample_bind_group",
-            &pipeline_cache.get_bind_group_layout(&blur.two.upsample_layout),
-            &BindGroupEntries::sequential((
-                view_binding.clone(),
-                settings_binding.clone(),
-                depth,
-                normal,
-                &voxel_textures.low.default_view,
-                &full.default_view,
-            )),
-        );
-        let blur_layout = pipeline_cache.get_bind_group_layout(&blur.two.layout);
-        let blur_pass = |label, input: &TextureView, output: &TextureView| {
-            render_device.create_bind_group(
-                label,
-                &blur_layout,
-                &BindGroupEntries::sequential((
-                    view_binding.clone(),
-                    settings_binding.clone(),
-                    depth,
-                    input,
-                    output,
-                )),
-            )
+        let inputs = FilterInputs {
+            view: view_binding.clone(),
+            settings: settings_binding.clone(),
+            depth,
         };
-        let scratch = &voxel_textures.scratch.as_ref().unwrap_or(full).default_view;
-        let blur = voxel_textures.scratch.is_some().then(|| {
-            (
-                blur_pass("dynamic_ao_voxel_blur_x", &full.default_view, scratch),
-                blur_pass("dynamic_ao_voxel_blur_y", scratch, &full.default_view),
+        let upsample = blur.two.upsample_bind_group(
+            &render_device,
+            &pipeline_cache,
+            "dynamic_ao_voxel_upsample_bind_group",
+            &inputs,
+            normal,
+            [&voxel_textures.low.default_view, &full.default_view],
+        );
+        let blur = voxel_textures.scratch.as_ref().map(|scratch| {
+            blur.two.blur_bind_groups(
+                &render_device,
+                &pipeline_cache,
+                ["dynamic_ao_voxel_blur_x", "dynamic_ao_voxel_blur_y"],
+                &inputs,
+                [&full.default_view, &scratch.default_view],
             )
         });
         commands.entity(entity).insert(VoxelBindGroups {
