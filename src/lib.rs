@@ -38,15 +38,15 @@
 //! # Architecture
 //!
 //! One frame, from the camera component to PBR. Boxes are modules; every arrow into
-//! `compose` goes through the neutral per-view state of `view.rs` (settings, uniform, the
-//! far-field outputs and the count of passes still compiling), so `view.rs` and `compose`
+//! `compose` goes through the neutral per-view state of `view/` (settings, uniform, the
+//! far-field outputs and the count of passes still compiling), so `view/` and `compose`
 //! import no technique, and a technique is its folder plus one line in the plugin list below
 //! and one in [`schedule`].
 //!
 //! ```text
 //!  main world                         render world, per camera with DynamicAo
 //!  ----------                         ----------------------------------------
-//!  DynamicAo (settings.rs, each  ──►  view.rs: DynamicAoView + DynamicAoUniform,
+//!  DynamicAo (settings/, each    ──►  view/: DynamicAoView + DynamicAoUniform,
 //!  technique's settings.rs)           back-face and occlusion textures
 //!                                        │
 //!  Bevy prepass (front layer) ───────►  nd_buffer/  back faces: second ND-buffer layer
@@ -55,7 +55,7 @@
 //!                                     image_space/ runs near_field/ | horizon/ | ray_march/
 //!                                        │  (one pass, one shader per folder)
 //!  SphereOccluder ─► spheres/ refit ─►  spheres/  splat ───┐
-//!  AoField ────────► fields/ bake ────►  fields/   grid boxes ├─► FarFieldOutputs (view.rs)
+//!  AoField ────────► fields/ bake ────►  fields/   grid boxes ├─► FarFieldOutputs (view/)
 //!  VoxelAoVolume ──► voxels/ gather ──►  voxels/   voxelize, sample, upsample ┘   │
 //!                                        │                                        │
 //!                                        ▼                                        │
@@ -73,7 +73,7 @@
 //! (main-world systems), `buffers.rs` (its data extracted and uploaded every frame),
 //! `pipeline.rs` (pipelines and per-view bind groups), `node.rs` (its passes), `view.rs` (its
 //! per-view state) and its `.wgsl`. The image-space techniques share their pipeline and node in
-//! `image_space/`. The uniform every pass reads is `DynamicAoUniform`, in Rust (`view.rs`) and
+//! `image_space/`. The uniform every pass reads is `DynamicAoUniform`, in Rust (`view/uniform.rs`) and
 //! WGSL (`shaders/uniform.wgsl`) alike, each field named after the setting it comes from.
 //!
 //! Shared code has no rendering in it: [`geometry`] (rest meshes, skinning and morphing,

@@ -1,0 +1,97 @@
+//! Main-world checks of the cameras that carry [`DynamicAo`]: those the plugin cannot serve
+//! render without it, with one warning.
+
+use bevy::camera::Camera;
+use bevy::ecs::prelude::*;
+use bevy::log::warn;
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::platform::collections::HashSet;
+use bevy::render::view::Msaa;
+
+use crate::settings::DynamicAo;
+
+/// Why a camera with [`DynamicAo`] renders without it.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(super) enum Unsupported {
+    Msaa,
+    EmptyViewport,
+}
+
+/// Marks a camera the plugin switched off because its viewport had no pixels: Bevy's renderer
+/// rejects zero-size views (a validation error that stops the app), so the camera waits,
+/// inactive, until its viewport has pixels again.
+#[derive(Component)]
+pub(crate) struct SuspendedForEmptyViewport;
+
+/// Cameras the plugin cannot serve lose Bevy's SSAO component (whose pass would fail on them)
+/// and get one warning; they get it back once the problem is gone.
+pub(super) fn check_cameras(
+    mut commands: Commands,
+    mut cameras: Query<
+        (
+            Entity,
+            &mut Camera,
+            &Msaa,
+            Has<ScreenSpaceAmbientOcclusion>,
+            Has<SuspendedForEmptyViewport>,
+            Option<&Name>,
+        ),
+        With<DynamicAo>,
+    >,
+    mut warned: Local<HashSet<(Entity, Unsupported)>>,
+) {
+    for (entity, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
+        let empty_viewport = camera
+            .viewport
+            .as_ref()
+            .is_some_and(|v| v.physical_size.x == 0 || v.physical_size.y == 0);
+        if empty_viewport && camera.is_active {
+            camera.is_active = false;
+            commands.entity(entity).insert(SuspendedForEmptyViewport);
+        } else if !empty_viewport && suspended {
+            camera.is_active = true;
+            commands
+                .entity(entity)
+                .remove::<SuspendedForEmptyViewport>();
+        }
+        let problem = if *msaa != Msaa::Off {
+            Some(Unsupported::Msaa)
+        } else if empty_viewport {
+            Some(Unsupported::EmptyViewport)
+        } else {
+            None
+        };
+        match problem {
+            Some(problem) => {
+                if warned.insert((entity, problem)) {
+                    let label =
+                        name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
+                    match problem {
+                        Unsupported::Msaa => warn!(
+                            "DynamicAo on camera {label} needs Msaa::Off (it is {msaa:?}); \
+                             rendering this camera without ambient occlusion"
+                        ),
+                        Unsupported::EmptyViewport => warn!(
+                            "camera {label} has a zero-size viewport, which Bevy's renderer \
+                             rejects; DynamicAo deactivates the camera until the viewport has \
+                             pixels"
+                        ),
+                    }
+                }
+                if has_ssao {
+                    commands
+                        .entity(entity)
+                        .remove::<ScreenSpaceAmbientOcclusion>();
+                }
+            }
+            None => {
+                warned.retain(|(e, _)| *e != entity);
+                if !has_ssao {
+                    commands
+                        .entity(entity)
+                        .insert(ScreenSpaceAmbientOcclusion::default());
+                }
+            }
+        }
+    }
+}

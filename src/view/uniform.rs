@@ -1,0 +1,159 @@
+//! Extraction of each camera's settings into its render-world view: the neutral
+//! [`DynamicAoView`](super::DynamicAoView) and the uniform every pass reads.
+
+use bevy::camera::{Camera, Camera3d};
+use bevy::ecs::prelude::*;
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::render::{Extract, render_resource::ShaderType, sync_world::RenderEntity, view::Msaa};
+
+use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
+
+use super::{DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, PendingPasses};
+
+/// The uniform every pass of a view reads; `DynamicAoUniform` in `shaders/uniform.wgsl`, field
+/// for field. Each field is named after the [`DynamicAo`] setting it comes from.
+#[derive(Component, ShaderType, Clone, Copy, Debug, Default)]
+pub(crate) struct DynamicAoUniform {
+    /// Reach of the image-space technique, metres: R, or the near-field radius where the far
+    /// field counts the rest.
+    pub image_space_radius: f32,
+    pub intensity: f32,
+    /// [`crate::NearFieldParams`]; `near_field_back_layer` is 1 when the back-face layer
+    /// occludes.
+    pub near_field_max_samples: u32,
+    pub near_field_min_samples: u32,
+    pub near_field_back_layer: u32,
+    /// 1 when an image-space technique (near field, horizon or ray march) is on.
+    pub image_space: u32,
+    /// Blur half-width, pixels (0 = off).
+    pub blur_radius: u32,
+    /// Blur depth sharpness, no unit.
+    pub blur_sharpness: f32,
+    /// Horizon-based AO parameters (see [`crate::HorizonParams`]).
+    pub horizon_directions: u32,
+    pub horizon_steps: u32,
+    pub horizon_angle_bias: f32,
+    pub horizon_attenuation: f32,
+    pub horizon_contrast: f32,
+    pub horizon_mode: u32,
+    /// Ray-marched reference parameters (see [`crate::RayMarchParams`]).
+    pub ray_march_directions: u32,
+    pub ray_march_elevations: u32,
+    pub ray_march_steps: u32,
+    /// 1 at full resolution, 2 at half resolution.
+    pub resolution_scale: u32,
+    /// 1 when sphere occluders take part.
+    pub spheres: u32,
+    /// 0: near + far, 1: max(near, far) (see [`crate::FarFieldBlend`]).
+    pub far_field_blend: u32,
+    /// 1 when AO field occluders take part.
+    pub fields: u32,
+    /// 1 when voxel volumes take part.
+    pub voxels: u32,
+    /// R ([`DynamicAo::radius`]), metres: every far-field term counts occluders within it.
+    pub radius: f32,
+    /// Under [`crate::FarFieldBlend::CountOnce`] with an image-space technique:
+    /// [`DynamicAo::near_field_radius`], metres; far-field terms leave out the occluders within
+    /// it that the ND-buffer holds. 0 where the far field counts every occluder.
+    pub near_field_radius: f32,
+    /// 1 when the back-face layer is drawn: the ND-buffer holds the first solid interval of each
+    /// pixel, front layer to back layer, not only the front surface.
+    pub seen_back_layer: u32,
+}
+
+pub(super) fn extract_views(
+    mut commands: Commands,
+    cameras: Extract<
+        Query<
+            (
+                RenderEntity,
+                &Camera,
+                &DynamicAo,
+                &Msaa,
+                Has<ScreenSpaceAmbientOcclusion>,
+            ),
+            With<Camera3d>,
+        >,
+    >,
+    present: Res<FarTermsPresent>,
+) {
+    for (entity, camera, ao, msaa, has_ssao) in &cameras {
+        let mut entity_commands = commands.entity(entity);
+        if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
+            entity_commands.remove::<(
+                DynamicAoView,
+                DynamicAoUniform,
+                FarFieldOutputs,
+                PendingPasses,
+            )>();
+            continue;
+        }
+        let params = ao.near_field.sanitized();
+        let blur = ao.blur.sanitized();
+        let near_field = ao.technique == AoTechnique::NearField;
+        let image_space =
+            near_field || matches!(ao.technique, AoTechnique::Horizon | AoTechnique::RayMarch);
+        let horizon = ao.horizon.sanitized();
+        let rays = ao.ray_march.sanitized();
+        // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.
+        let term = |term: FarTerm, on: bool| {
+            on && present.0[term as usize] && ao.technique != AoTechnique::BevySsao
+        };
+        let far_terms = [
+            term(FarTerm::Spheres, ao.spheres),
+            term(FarTerm::Fields, ao.fields),
+            term(FarTerm::Voxels, ao.voxels),
+        ];
+        let [spheres, fields, voxels] = far_terms;
+        // Under CountOnce the image-space technique counts what the ND-buffer shows within its
+        // own reach, and the far field everything else within R.
+        let radius = ao.effective_radius();
+        let count_once = image_space
+            && far_terms.contains(&true)
+            && ao.far_field_blend == FarFieldBlend::CountOnce;
+        let near_radius = if count_once {
+            radius.min(ao.effective_near_field_radius())
+        } else {
+            radius
+        };
+        let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
+        entity_commands.insert((
+            DynamicAoView {
+                settings: ao.clone(),
+                back_layer,
+                blur_radius: if image_space { blur.radius } else { 0 },
+                half_resolution: image_space && ao.half_resolution,
+                far_terms,
+            },
+            FarFieldOutputs::default(),
+            PendingPasses::default(),
+            DynamicAoUniform {
+                image_space_radius: near_radius,
+                intensity: ao.effective_intensity(),
+                near_field_max_samples: params.max_samples,
+                near_field_min_samples: params.min_samples,
+                near_field_back_layer: u32::from(params.back_layer),
+                image_space: u32::from(image_space),
+                blur_radius: blur.radius,
+                blur_sharpness: blur.sharpness,
+                horizon_directions: horizon.directions,
+                horizon_steps: horizon.steps,
+                horizon_angle_bias: horizon.angle_bias,
+                horizon_attenuation: horizon.attenuation,
+                horizon_contrast: horizon.contrast,
+                horizon_mode: horizon.mode.shader_index(),
+                ray_march_directions: rays.directions,
+                ray_march_elevations: rays.elevations,
+                ray_march_steps: rays.steps,
+                resolution_scale: if ao.half_resolution { 2 } else { 1 },
+                spheres: u32::from(spheres),
+                far_field_blend: ao.far_field_blend.shader_index(),
+                fields: u32::from(fields),
+                voxels: u32::from(voxels),
+                radius,
+                near_field_radius: if count_once { near_radius } else { 0.0 },
+                seen_back_layer: u32::from(back_layer),
+            },
+        ));
+    }
+}
