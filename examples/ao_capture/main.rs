@@ -5,8 +5,14 @@
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
-//!     [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+//!     [--time SECONDS] [--timings] --out-ao AO.png [--out-color COLOR.png]
 //! ```
+//!
+//! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
+//! preset, `DynamicAo::default()`). `--frames N` renders N frames with a still camera before the
+//! capture. `--timings` then prints one line, `timings: ao_gpu_ms=<mean GPU ms of the AO passes>
+//! frame_gpu_ms=<all passes> frames=<n>`, over the frames rendered once the scene was ready (for
+//! `bevy-ssao` the AO pass is Bevy's own).
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
@@ -20,6 +26,7 @@ mod common;
 #[path = "../common/far_terms.rs"]
 mod far_terms;
 mod options;
+mod timings;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -28,9 +35,11 @@ use std::time::{Duration, Instant};
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState};
 use bevy::camera::RenderTarget;
+use bevy::diagnostic::DiagnosticsStore;
 use bevy::gltf::{Gltf, GltfAssetLabel};
 use bevy::prelude::*;
 use bevy::render::{
+    diagnostic::RenderDiagnosticsPlugin,
     gpu_readback::{Readback, ReadbackComplete},
     render_resource::TextureFormat,
     view::screenshot::{Screenshot, ScreenshotCaptured},
@@ -70,6 +79,7 @@ fn main() {
         .map(|f| f.to_string_lossy().into_owned())
         .unwrap_or_default();
 
+    let timings = options.timings;
     let mut app = App::new();
     app.add_plugins((
         common::headless_plugins().set(AssetPlugin {
@@ -98,6 +108,9 @@ fn main() {
     })
     .add_systems(Startup, load_scene)
     .add_systems(Update, (place_volume, drive).chain());
+    if timings {
+        app.add_plugins(RenderDiagnosticsPlugin);
+    }
     let exit = app.run();
     if let AppExit::Error(_) = exit {
         std::process::exit(1);
@@ -192,20 +205,19 @@ fn scene_ready(
         Msaa::Off,
         DynamicAo {
             technique: options.technique,
-            near_field: options.preset.near_field(),
-            horizon: options.preset.horizon(),
-            ray_march: options.preset.ray_march(),
             radius: options.radius,
             blur: AoBlur {
                 radius: options.blur,
                 ..default()
             },
-            half_resolution: options.half_resolution,
+            half_resolution: options.half_resolution
+                || (options.default_technique && options.preset.half_resolution()),
             spheres: options.far == Some(FarTerm::Spheres),
             fields: options.far == Some(FarTerm::Fields),
             voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
-            ..default()
+            // Every technique's budget at the chosen level.
+            ..DynamicAo::from_preset(options.preset)
         },
         readback.clone(),
     ));
@@ -334,9 +346,16 @@ fn drive(
     mut capture: ResMut<Capture>,
     assets: Res<AssetServer>,
     fields: Query<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>,
+    mut diagnostics: Option<ResMut<DiagnosticsStore>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
+    let ready = capture.stage != Stage::Loading
+        && !(capture.options.far == Some(FarTerm::Voxels) && capture.volume.is_none())
+        && !fields.iter().any(|(active, pending)| !active || pending);
+    if !ready && let Some(store) = diagnostics.as_deref_mut() {
+        timings::forget(store);
+    }
     if let Some(failure) = capture.failure.take() {
         eprintln!("ao_capture: {failure}");
         exit.write(AppExit::error());
@@ -409,6 +428,10 @@ fn drive(
                     options.radius,
                     options.out_ao.display()
                 );
+                if let (true, Some(store)) = (options.timings, diagnostics.as_deref()) {
+                    let bevy_ssao = options.technique == AoTechnique::BevySsao;
+                    println!("{}", timings::summary(store, bevy_ssao));
+                }
                 exit.write(AppExit::Success);
             } else if capture.frames > LOAD_TIMEOUT_FRAMES * 2 {
                 eprintln!("ao_capture: the GPU read-back never completed");

@@ -10,7 +10,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--timings] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -19,9 +19,9 @@ const MAX_SIZE: u32 = 8192;
 /// Every name `--technique` takes: the plugin's techniques, each far-field term alone, and each
 /// image-space technique with a far-field term added.
 pub fn technique_names() -> Vec<String> {
-    let mut names: Vec<String> = AoTechnique::ALL
-        .iter()
-        .map(|(n, _)| n.to_string())
+    let mut names: Vec<String> = std::iter::once(DEFAULT_TECHNIQUE)
+        .chain(AoTechnique::ALL.iter().map(|(n, _)| *n))
+        .map(str::to_string)
         .collect();
     names.extend(FarTerm::ALL.map(|term| term.name().to_string()));
     for (name, technique) in AoTechnique::ALL {
@@ -49,6 +49,10 @@ fn parse_technique(name: &str) -> Option<(AoTechnique, Option<FarTerm>)> {
     }
 }
 
+/// The `--technique` name of what `DynamicAo::from_preset(--preset)` runs (with the default
+/// preset, what `DynamicAo::default()` runs).
+pub const DEFAULT_TECHNIQUE: &str = "default";
+
 /// What one capture does.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -58,6 +62,8 @@ pub struct Options {
     /// World-space AO radius, metres.
     pub radius: f32,
     pub technique: AoTechnique,
+    /// `--technique default`: everything as `DynamicAo::from_preset(preset)` sets it.
+    pub default_technique: bool,
     /// The far-field term, if any.
     pub far: Option<FarTerm>,
     /// How the far-field term joins the image-space one.
@@ -74,6 +80,8 @@ pub struct Options {
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,
+    /// Print the mean GPU time of the AO passes and of all passes after the capture.
+    pub timings: bool,
     pub out_ao: PathBuf,
     pub out_color: Option<PathBuf>,
 }
@@ -81,6 +89,9 @@ pub struct Options {
 impl Options {
     /// The technique as `--technique` names it.
     pub fn technique_name(&self) -> String {
+        if self.default_technique {
+            return DEFAULT_TECHNIQUE.into();
+        }
         let far = self.far.map(FarTerm::name);
         match (self.technique, far) {
             (AoTechnique::Off, Some(far)) => far.into(),
@@ -96,6 +107,7 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoPreset::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
+        let (mut default_technique, mut timings) = (false, false);
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color) = (None, None);
@@ -123,6 +135,11 @@ impl Options {
                         }
                         return Ok(None);
                     }
+                    default_technique = name == DEFAULT_TECHNIQUE;
+                    if default_technique {
+                        technique = Some((AoTechnique::default(), None));
+                        continue;
+                    }
                     technique = Some(parse_technique(&name).ok_or(format!(
                         "unknown technique '{name}' (known: {})",
                         technique_names().join(", ")
@@ -135,6 +152,7 @@ impl Options {
                     ))?;
                 }
                 "--half-res" => half_resolution = true,
+                "--timings" => timings = true,
                 "--far-blend" => {
                     let name = value()?;
                     far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
@@ -199,8 +217,16 @@ impl Options {
             height: height.ok_or_else(|| missing("--height"))?,
             radius: radius.ok_or_else(|| missing("--radius"))?,
             technique: technique
-                .map(|(t, _)| t)
+                .map(|(t, _)| {
+                    if default_technique {
+                        preset.technique()
+                    } else {
+                        t
+                    }
+                })
                 .ok_or_else(|| missing("--technique"))?,
+            default_technique,
+            timings,
             far: technique.and_then(|(_, far)| far),
             far_blend,
             voxel_falloff,

@@ -79,6 +79,7 @@ fn lists_its_techniques() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     for name in [
+        "default",
         "none",
         "near-field",
         "bevy-ssao",
@@ -436,4 +437,87 @@ fn captures_the_far_field_of_the_generated_scene() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn default_technique_and_timings() {
+    let dir = temp_dir("timings");
+    let capture = |technique: &str, extra: &[&str]| {
+        let out_ao = dir.join(format!("{technique}.png"));
+        let mut args = vec![
+            "--scene",
+            scene_path().to_str().unwrap(),
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "--radius",
+            "0.75",
+            "--technique",
+            technique,
+            "--out-ao",
+            out_ao.to_str().unwrap(),
+        ]
+        .into_iter()
+        .map(str::to_string)
+        .collect::<Vec<_>>();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = run(&args);
+        assert!(
+            out.status.success(),
+            "ao_capture failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        (read_visibility_png(&out_ao).expect("a PNG").2, stdout)
+    };
+    // `default` is what `DynamicAo::default()` runs: today the near field at preset High.
+    let (default, text) = capture("default", &[]);
+    let (near_field, _) = capture("near-field", &[]);
+    let differ = default
+        .iter()
+        .zip(&near_field)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "--technique default is the default near field");
+    assert!(!text.contains("timings:"), "no timings line unless asked");
+    // With --preset low, `default` is the Low preset: horizon-based AO at half resolution.
+    let (low, _) = capture("default", &["--preset", "low"]);
+    let (horizon_half, _) = capture("horizon", &["--preset", "low", "--half-res"]);
+    let differ = low
+        .iter()
+        .zip(&horizon_half)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "--technique default follows --preset");
+
+    let timings = |technique: &str| -> (f64, f64, u32) {
+        let (_, text) = capture(technique, &["--frames", "12", "--timings"]);
+        let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("timings:")).collect();
+        assert_eq!(lines.len(), 1, "exactly one timings line in:\n{text}");
+        let field = |key: &str| -> String {
+            lines[0]
+                .split_whitespace()
+                .find_map(|w| w.strip_prefix(&format!("{key}=")))
+                .unwrap_or_else(|| panic!("{key} missing from {}", lines[0]))
+                .to_string()
+        };
+        (
+            field("ao_gpu_ms").parse().unwrap(),
+            field("frame_gpu_ms").parse().unwrap(),
+            field("frames").parse().unwrap(),
+        )
+    };
+    for technique in ["near-field", "bevy-ssao"] {
+        let (ao, frame, frames) = timings(technique);
+        assert!(
+            frames > 0 && frames <= 20,
+            "{technique}: {frames} frames measured"
+        );
+        assert!(
+            ao > 0.0 && frame >= ao,
+            "{technique}: ao {ao} ms, frame {frame} ms"
+        );
+    }
 }
