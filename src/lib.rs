@@ -54,6 +54,7 @@
 //!                                        ▼
 //!                                     image_space/ runs near_field/ | horizon/ | ray_march/
 //!                                        │  (one pass, one shader per folder)
+//!                                     temporal/ joins it with its reprojected history (opt-in)
 //!  SphereOccluder ─► spheres/ refit ─►  spheres/  splat ───┐
 //!  AoField ────────► fields/ bake ────►  fields/   grid boxes ├─► FarFieldOutputs (view/)
 //!  VoxelAoVolume ──► voxels/ gather ──►  voxels/   voxelize, sample, upsample ┘   │
@@ -120,6 +121,7 @@ pub mod reference;
 pub mod schedule;
 pub mod settings;
 pub mod spheres;
+pub mod temporal;
 mod view;
 pub mod voxels;
 
@@ -127,7 +129,7 @@ use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
 pub use settings::{
-    AoBlur, AoPreset, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
+    AoBlur, AoPreset, AoTechnique, AoTemporal, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
     HorizonParams, NearFieldParams, RayMarchParams,
 };
 
@@ -137,8 +139,8 @@ pub mod prelude {
     pub use crate::fields::{AoField, AoFieldData};
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
-        AoBlur, AoPreset, AoTechnique, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
-        HorizonParams, NearFieldParams, RayMarchParams,
+        AoBlur, AoPreset, AoTechnique, AoTemporal, DynamicAo, FarFieldBlend, FieldShading,
+        HorizonMode, HorizonParams, NearFieldParams, RayMarchParams,
     };
     #[cfg(feature = "gizmos")]
     pub use crate::spheres::ShowOccluderSpheres;
@@ -177,6 +179,7 @@ impl Plugin for DynamicAoPlugin {
                 fields::AoFieldPlugin,
                 voxels::VoxelAoPlugin,
                 image_space::ImageSpacePlugin,
+                temporal::TemporalPlugin,
                 filter::FilterPlugin,
                 compose::ComposePlugin,
                 readback::ReadbackPlugin,

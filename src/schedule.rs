@@ -29,6 +29,8 @@ pub enum DynamicAoSystems {
     BackFaces,
     /// The view's image-space technique (near-field, horizon-based or ray march).
     NearField,
+    /// Temporal accumulation of the image-space occlusion.
+    Temporal,
     /// The far field: splats the spheres of sphere occluders, and draws the grid boxes of AO
     /// field occluders.
     FarField,
@@ -95,7 +97,9 @@ pub(crate) fn configure(app: &mut App) {
     render_app.configure_sets(
         Core3d,
         // At half resolution the blur runs on the upsampled, full-resolution AO.
-        (BackFaces, NearField, FarField, Upsample, Filter, Compose)
+        (
+            BackFaces, NearField, Temporal, FarField, Upsample, Filter, Compose,
+        )
             .chain()
             // The front layer is Bevy's prepass output.
             .after(Core3dSystems::Prepass)

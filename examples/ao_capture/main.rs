@@ -5,7 +5,7 @@
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
-//!     [--time SECONDS] [--timings] --out-ao AO.png [--out-color COLOR.png]
+//!     [--time SECONDS] [--temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
@@ -51,6 +51,10 @@ use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
 use bevy_dynamic_ao::reference::posed::posed_triangles_of;
 use options::{FarTerm, Options};
+
+/// Frames rendered once the scene is ready before `--timings` starts measuring (timestamps
+/// come back a few frames late).
+const TIMING_WARMUP_FRAMES: u32 = 8;
 
 /// Frames a scene may take to load before the run gives up.
 const LOAD_TIMEOUT_FRAMES: u32 = 2000;
@@ -216,6 +220,11 @@ fn scene_ready(
             fields: options.far == Some(FarTerm::Fields),
             voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
+            temporal: if options.temporal {
+                AoTemporal::ON
+            } else {
+                AoTemporal::default()
+            },
             // Every technique's budget at the chosen level.
             ..DynamicAo::from_preset(options.preset)
         },
@@ -350,7 +359,9 @@ fn drive(
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
+    // Bevy's SSAO stands in while a new camera's passes start: those frames do not count.
     let ready = capture.stage != Stage::Loading
+        && capture.frames >= capture.stage_start + TIMING_WARMUP_FRAMES
         && !(capture.options.far == Some(FarTerm::Voxels) && capture.volume.is_none())
         && !fields.iter().any(|(active, pending)| !active || pending);
     if !ready && let Some(store) = diagnostics.as_deref_mut() {

@@ -10,7 +10,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--timings] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -80,6 +80,8 @@ pub struct Options {
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,
+    /// Accumulate the image-space occlusion over the frames (`AoTemporal::ON`).
+    pub temporal: bool,
     /// Print the mean GPU time of the AO passes and of all passes after the capture.
     pub timings: bool,
     pub out_ao: PathBuf,
@@ -107,7 +109,7 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoPreset::High, 4u32, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
-        let (mut default_technique, mut timings) = (false, false);
+        let (mut default_technique, mut timings, mut temporal) = (false, false, false);
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color) = (None, None);
@@ -153,6 +155,7 @@ impl Options {
                 }
                 "--half-res" => half_resolution = true,
                 "--timings" => timings = true,
+                "--temporal" => temporal = true,
                 "--far-blend" => {
                     let name = value()?;
                     far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
@@ -227,6 +230,7 @@ impl Options {
                 .ok_or_else(|| missing("--technique"))?,
             default_technique,
             timings,
+            temporal,
             far: technique.and_then(|(_, far)| far),
             far_blend,
             voxel_falloff,

@@ -40,6 +40,9 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
             continue;
         };
         all += mean;
+        if std::env::var_os("AO_CAPTURE_SPANS").is_some() {
+            eprintln!("span {name}: {mean:.3} ms");
+        }
         if is_ao_pass(name, bevy_ssao) {
             ao += mean;
             let measured = diagnostic.history_len();

@@ -10,7 +10,7 @@
     view_position, view_position_at,
 }
 #import bevy_dynamic_ao::nd_buffer::pixel_world_size
-#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT}
+#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT, frame_offset}
 #import bevy_dynamic_ao::math::TAU
 
 const HALF_PI: f32 = 1.57079632679489662;
@@ -48,8 +48,9 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let steps = clamp(u32(radius_px), 1u, settings.horizon_steps);
     let step_px = radius_px / f32(steps);
     let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x68bc21ebu));
-    let rotation = f32(hash) * HASH_TO_UNIT;
-    let pixel_jitter = f32(pcg_hash(hash)) * HASH_TO_UNIT;
+    let frame = frame_offset(settings.frame_index);
+    let rotation = fract(f32(hash) * HASH_TO_UNIT + frame.x);
+    let pixel_jitter = fract(f32(pcg_hash(hash)) * HASH_TO_UNIT + frame.y);
     let directions = settings.horizon_directions;
     let mode = settings.horizon_mode;
 
@@ -65,7 +66,7 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
         if mode == 0u {
             sin_horizon = -1.0;
         } else if mode == 2u {
-            jitter = f32(pcg_hash(hash ^ ((i + 1u) * 0x9e3779b9u))) * HASH_TO_UNIT;
+            jitter = fract(f32(pcg_hash(hash ^ ((i + 1u) * 0x9e3779b9u))) * HASH_TO_UNIT + frame.y);
             let q = pixel + vec2<i32>(floor(dir + 0.5));
             if all(q >= vec2<i32>(0)) && all(q < dims) && any(q != pixel) {
                 let dq = textureLoad(front_depth, q, 0);

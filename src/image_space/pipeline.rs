@@ -117,7 +117,12 @@ pub(super) fn prepare_image_space_bind_groups(
                 front_normal,
                 &textures.back_depth.default_view,
                 &textures.back_normal.default_view,
-                &textures.near_occlusion.default_view,
+                // Under temporal accumulation the temporal pass writes `near_occlusion`.
+                &textures
+                    .raw_occlusion
+                    .as_ref()
+                    .unwrap_or(&textures.near_occlusion)
+                    .default_view,
             )),
         );
         commands

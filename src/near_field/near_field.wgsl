@@ -5,8 +5,8 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
 }
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
-#import bevy_dynamic_ao::math::PI
-#import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample}
+#import bevy_dynamic_ao::math::{PI, TAU}
+#import bevy_dynamic_ao::sampling::{pixel_rotation, disk_sample, frame_offset}
 #import bevy_dynamic_ao::sphere_occlusion::sphere_occlusion
 
 
@@ -59,24 +59,34 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let area = PI * radius_px * radius_px;
     let count = clamp(u32(ceil(min(area, 4096.0))), settings.near_field_min_samples, settings.near_field_max_samples);
     // Each sample stands for area / count pixels; a sphere of that cross-section has a radius
-    // of this many pixel sizes.
-    let sphere_scale = radius_px / sqrt(f32(count));
-    let rotation = pixel_rotation(vec2<u32>(pixel));
+    // of this many pixel sizes. Under temporal accumulation over N frames, a frame's samples are
+    // a 1/N share of the pattern the history averages: each stands for area / (count · N)
+    // pixels and counts N times, so that the average estimates the full budget, not N
+    // estimates of a small one.
+    let frames = settings.temporal_frames;
+    let sphere_scale = radius_px / sqrt(f32(count) * frames);
+    let frame = frame_offset(settings.frame_index);
+    let rotation = pixel_rotation(vec2<u32>(pixel)) + frame.x * TAU;
+    let ring = fract(0.5 + frame.y);
 
     // Open fraction left by the occluders so far: 1 − Π(1 − A_ψ).
     var open = 1.0;
     for (var i = 0u; i < count; i++) {
-        let offset = disk_sample(i, count, radius_px, rotation);
+        let offset = disk_sample(i, count, radius_px, rotation, ring);
         let q = pixel + vec2<i32>(floor(offset + 0.5));
         if all(q == pixel) || any(q < vec2<i32>(0)) || any(q >= vec2<i32>(size)) {
             continue;
         }
-        open *= 1.0 - occluder(q, textureLoad(front_depth, q, 0),
+        var sample_open = 1.0 - occluder(q, textureLoad(front_depth, q, 0),
             textureLoad(front_normal, q, 0).xyz, size, p, n, sphere_scale);
         if settings.near_field_back_layer != 0u {
-            open *= 1.0 - occluder(q, textureLoad(back_depth, q, 0),
+            sample_open *= 1.0 - occluder(q, textureLoad(back_depth, q, 0),
                 textureLoad(back_normal, q, 0).xyz, size, p, n, sphere_scale);
         }
+        if frames > 1.0 {
+            sample_open = pow(sample_open, frames);
+        }
+        open *= sample_open;
     }
     textureStore(occlusion, r.out_pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
 }

@@ -108,6 +108,7 @@ fn every_documented_default_is_the_real_one() {
     let horizon = HorizonParams::default();
     let ray_march = RayMarchParams::default();
     let blur = AoBlur::default();
+    let temporal = AoTemporal::default();
     let named: &[(&str, &dyn PartialReflect)] = &[
         ("DEFAULT_RADIUS", &DEFAULT_RADIUS),
         ("DEFAULT_NEAR_FIELD_RADIUS", &DEFAULT_NEAR_FIELD_RADIUS),
@@ -120,6 +121,8 @@ fn every_documented_default_is_the_real_one() {
         ("HorizonParams::default", &horizon),
         ("RayMarchParams::default", &ray_march),
         ("AoBlur::default", &blur),
+        ("AoTemporal::default", &temporal),
+        ("DEFAULT_TEMPORAL_FRAMES", &DEFAULT_TEMPORAL_FRAMES),
         (
             "SphereOccluder::DEFAULT_COUNT",
             &SphereOccluder::DEFAULT_COUNT,
@@ -160,6 +163,7 @@ fn every_documented_default_is_the_real_one() {
         named,
     );
     check::<AoBlur>(include_str!("../filter/settings.rs"), "AoBlur", named);
+    check::<AoTemporal>(include_str!("../temporal/settings.rs"), "AoTemporal", named);
     check::<SphereOccluder>(
         include_str!("../spheres/component.rs"),
         "SphereOccluder",

@@ -12,6 +12,7 @@ pub use crate::filter::settings::{AoBlur, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHAR
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};
 pub use crate::ray_march::settings::RayMarchParams;
+pub use crate::temporal::settings::{AoTemporal, DEFAULT_TEMPORAL_FRAMES};
 pub use preset::AoPreset;
 
 mod preset;
@@ -71,6 +72,9 @@ pub struct DynamicAo {
     pub ray_march: RayMarchParams,
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
+    /// Temporal accumulation of the image-space occlusion. Default: [`AoTemporal::default`]
+    /// (off).
+    pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
     /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `false`.
@@ -111,6 +115,7 @@ impl Default for DynamicAo {
             horizon: HorizonParams::default(),
             ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
+            temporal: AoTemporal::default(),
             half_resolution: false,
             spheres: true,
             far_field_blend: FarFieldBlend::CountOnce,

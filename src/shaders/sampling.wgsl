@@ -20,10 +20,18 @@ fn pixel_rotation(pixel: vec2<u32>) -> f32 {
     return f32(pcg_hash(pixel.x ^ pcg_hash(pixel.y))) * HASH_TO_ANGLE;
 }
 
+// Offsets of frame `frame` in [0, 1)², along the plastic-number sequence (Roberts' R2): low
+// discrepancy over consecutive frames, so under temporal accumulation each frame samples between
+// the previous ones. Frame 0 (every frame without accumulation) gives (0, 0).
+fn frame_offset(frame: u32) -> vec2<f32> {
+    return fract(f32(frame & 1023u) * vec2<f32>(0.75487766624669276, 0.56984029099805327));
+}
+
 // Sample `i` of `count` on a Vogel spiral filling a disk of `radius` pixels, rotated by
-// `rotation`: evenly spread for any count, so the count can follow the projected radius.
-fn disk_sample(i: u32, count: u32, radius: f32, rotation: f32) -> vec2<f32> {
-    let r = radius * sqrt((f32(i) + 0.5) / f32(count));
+// `rotation` with each ring shifted by `ring` (0.5: the spiral's own rings): evenly spread for
+// any count, so the count can follow the projected radius.
+fn disk_sample(i: u32, count: u32, radius: f32, rotation: f32, ring: f32) -> vec2<f32> {
+    let r = radius * sqrt((f32(i) + ring) / f32(count));
     let angle = f32(i) * GOLDEN_ANGLE + rotation;
     return vec2<f32>(cos(angle), sin(angle)) * r;
 }

@@ -46,4 +46,8 @@ struct DynamicAoUniform {
     near_field_radius: f32,
     // 1 when the back-face layer is drawn.
     seen_back_layer: u32,
+    // The frame's place in the sample pattern's sequence: 0 without temporal accumulation.
+    frame_index: u32,
+    // Frames the temporal history averages (1 without accumulation).
+    temporal_frames: f32,
 }

@@ -105,6 +105,8 @@ pub(crate) struct DynamicAoView {
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.
     pub half_resolution: bool,
+    /// The image-space occlusion is accumulated over frames (see [`crate::AoTemporal`]).
+    pub temporal: bool,
     /// The far-field terms that take part, by [`FarTerm`].
     far_terms: [bool; FarTerm::COUNT],
 }
@@ -163,8 +165,12 @@ impl PendingPasses {
 pub(crate) struct DynamicAoTextures {
     pub back_depth: CachedTexture,
     pub back_normal: CachedTexture,
-    /// What the technique pass writes: full size, or half size at half resolution.
+    /// The image-space occlusion the filter reads: full size, or half size at half resolution.
+    /// The technique pass writes it, or under temporal accumulation the temporal pass does.
     pub near_occlusion: CachedTexture,
+    /// Under temporal accumulation, what the technique pass writes (the size of
+    /// `near_occlusion`): this frame's value before it joins the history.
+    pub raw_occlusion: Option<CachedTexture>,
     /// Full-size occlusion the blur and compose read: `near_occlusion` itself, or its joint
     /// bilateral upsampling at half resolution.
     pub full_occlusion: CachedTexture,
@@ -270,6 +276,18 @@ fn prepare_view_textures(
         } else {
             texture("dynamic_ao_near_occlusion", size, OCCLUSION_FORMAT, storage)
         };
+        let raw_occlusion = view.temporal.then(|| {
+            texture(
+                "dynamic_ao_raw_occlusion",
+                if view.half_resolution {
+                    half_size(size)
+                } else {
+                    size
+                },
+                OCCLUSION_FORMAT,
+                storage,
+            )
+        });
         let full_occlusion = if view.half_resolution {
             texture("dynamic_ao_full_occlusion", size, OCCLUSION_FORMAT, storage)
         } else {
@@ -279,6 +297,7 @@ fn prepare_view_textures(
             back_depth: texture("dynamic_ao_back_depth", size, DEPTH_FORMAT, attachment),
             back_normal: texture("dynamic_ao_back_normal", size, NORMAL_FORMAT, attachment),
             near_occlusion,
+            raw_occlusion,
             full_occlusion,
             blur_scratch: texture("dynamic_ao_blur_scratch", size, OCCLUSION_FORMAT, storage),
         });

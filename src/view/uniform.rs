@@ -2,6 +2,7 @@
 //! [`DynamicAoView`](super::DynamicAoView) and the uniform every pass reads.
 
 use bevy::camera::{Camera, Camera3d};
+use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::render::{Extract, render_resource::ShaderType, sync_world::RenderEntity, view::Msaa};
@@ -59,6 +60,12 @@ pub(crate) struct DynamicAoUniform {
     /// 1 when the back-face layer is drawn: the ND-buffer holds the first solid interval of each
     /// pixel, front layer to back layer, not only the front surface.
     pub seen_back_layer: u32,
+    /// The frame's place in the sample pattern's sequence (see [`crate::AoTemporal`]): the frame
+    /// count under temporal accumulation, 0 without.
+    pub frame_index: u32,
+    /// Frames the temporal history averages, 1 without accumulation: the near field sizes its
+    /// sample spheres for the whole accumulated budget.
+    pub temporal_frames: f32,
 }
 
 pub(super) fn extract_views(
@@ -76,6 +83,7 @@ pub(super) fn extract_views(
         >,
     >,
     present: Res<FarTermsPresent>,
+    frame_count: Extract<Res<FrameCount>>,
 ) {
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
@@ -89,7 +97,7 @@ pub(super) fn extract_views(
             continue;
         }
         let params = ao.near_field.sanitized();
-        let blur = ao.blur.sanitized();
+        let mut blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
         let image_space =
             near_field || matches!(ao.technique, AoTechnique::Horizon | AoTechnique::RayMarch);
@@ -116,6 +124,11 @@ pub(super) fn extract_views(
         } else {
             radius
         };
+        // Accumulated over frames, the occlusion needs half the blur.
+        let temporal = image_space && ao.temporal.enabled;
+        if temporal {
+            blur.radius = blur.radius.div_ceil(2);
+        }
         let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
         entity_commands.insert((
             DynamicAoView {
@@ -123,6 +136,7 @@ pub(super) fn extract_views(
                 back_layer,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
+                temporal,
                 far_terms,
             },
             FarFieldOutputs::default(),
@@ -153,6 +167,12 @@ pub(super) fn extract_views(
                 radius,
                 near_field_radius: if count_once { near_radius } else { 0.0 },
                 seen_back_layer: u32::from(back_layer),
+                frame_index: if temporal { frame_count.0 } else { 0 },
+                temporal_frames: if temporal {
+                    ao.temporal.frames() as f32
+                } else {
+                    1.0
+                },
             },
         ));
     }

@@ -32,4 +32,5 @@ mod scenes;
 mod shared_assets;
 mod skinned;
 mod spheres;
+mod temporal;
 mod voxels;

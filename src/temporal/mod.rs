@@ -1,0 +1,95 @@
+//! Temporal accumulation of the image-space occlusion (near field, horizon-based, ray march).
+//!
+//! Each frame the image-space technique moves its sample pattern along a low-discrepancy sequence
+//! (`frame_offset` in `shaders/sampling.wgsl`: a frame's rotation and ring or step offsets) and
+//! writes its result into a raw buffer. The temporal pass (`temporal.wgsl`) joins it with the
+//! pixel's history:
+//!
+//! - **Reprojection.** The history is read where the surface was last frame: this pixel's UV
+//!   minus Bevy's motion vector, which follows camera motion and moving, skinned and morphed
+//!   meshes alike.
+//! - **Disocclusion.** Of the four history texels around that place, only those whose linear
+//!   depth (within 5 %) and normal (cosine ≥ 0.9) match this surface count, weighted bilinearly;
+//!   where none does, the history starts again from this frame.
+//! - **Ghosting.** The history is clamped into the range of this frame's values in the 3 × 3
+//!   texels around the pixel, so an occluder that moves away without a motion vector on the
+//!   receiver (a contact shadow on a still floor) leaves no trail.
+//! - **Average.** Running mean over at most [`AoTemporal::max_frames`] frames: the history keeps
+//!   its frame count, and each frame weighs 1 / count.
+//! - **Reset.** The history is dropped on resize (its textures are made again), when any other
+//!   setting of the camera changes, when [`AoTemporal::reset`] is set (camera cuts), and where
+//!   the camera has no motion vectors yet.
+//!
+//! The history lives in two textures per view (read one, write the other, swapped every frame),
+//! kept across frames on the render-world view and made again only when the view's size changes.
+//! The blur that follows runs at half its radius.
+
+mod node;
+mod pipeline;
+pub mod settings;
+mod view;
+
+use bevy::app::{App, Last, Plugin, PostUpdate};
+use bevy::asset::embedded_asset;
+use bevy::core_pipeline::prepass::MotionVectorPrepass;
+use bevy::core_pipeline::schedule::Core3d;
+use bevy::ecs::prelude::*;
+use bevy::render::{GpuResourceAppExt, Render, RenderSystems};
+
+use crate::capabilities;
+use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::settings::DynamicAo;
+pub use settings::AoTemporal;
+
+/// Accumulates the image-space occlusion of cameras whose [`AoTemporal`] is on.
+pub struct TemporalPlugin;
+
+impl Plugin for TemporalPlugin {
+    fn build(&self, app: &mut App) {
+        embedded_asset!(app, "temporal.wgsl");
+        app.register_type::<AoTemporal>()
+            .add_systems(PostUpdate, require_motion_vectors)
+            .add_systems(Last, clear_reset);
+    }
+
+    fn finish(&self, app: &mut App) {
+        let Some(render_app) = capabilities::render_app(app) else {
+            return;
+        };
+        render_app
+            .init_gpu_resource::<pipeline::TemporalPipeline>()
+            .add_systems(
+                Render,
+                (
+                    view::prepare_history.in_set(RenderSystems::PrepareResources),
+                    view::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
+                    pipeline::prepare_temporal_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                ),
+            )
+            .add_systems(
+                Core3d,
+                node::temporal_pass.in_set(DynamicAoSystems::Temporal),
+            );
+    }
+}
+
+/// Cameras that accumulate need Bevy's motion vectors.
+fn require_motion_vectors(
+    mut commands: Commands,
+    cameras: Query<(Entity, &DynamicAo), Without<MotionVectorPrepass>>,
+) {
+    for (entity, ao) in &cameras {
+        if ao.temporal.enabled {
+            commands.entity(entity).insert(MotionVectorPrepass);
+        }
+    }
+}
+
+/// A reset lasts one frame (it was extracted in this frame's render).
+fn clear_reset(mut cameras: Query<&mut DynamicAo>) {
+    for mut ao in &mut cameras {
+        if ao.temporal.reset {
+            ao.bypass_change_detection().temporal.reset = false;
+        }
+    }
+}

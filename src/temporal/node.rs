@@ -1,0 +1,44 @@
+//! The temporal pass of a view: one dispatch over its occlusion buffer.
+
+use bevy::ecs::prelude::*;
+use bevy::math::UVec2;
+use bevy::render::{
+    extract_component::DynamicUniformIndex,
+    render_resource::PipelineCache,
+    renderer::{RenderContext, ViewQuery},
+    view::ViewUniformOffset,
+};
+
+use super::pipeline::{TemporalBindGroup, TemporalPipeline};
+use crate::dispatch::{ComputeStep, record_passes};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+
+pub(crate) fn temporal_pass(
+    view: ViewQuery<(
+        &DynamicAoView,
+        &DynamicAoTextures,
+        &TemporalBindGroup,
+        &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
+    )>,
+    pipeline: Res<TemporalPipeline>,
+    pipeline_cache: Res<PipelineCache>,
+    mut ctx: RenderContext,
+) {
+    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
+    let (true, Some(compute_pipeline)) = (
+        ao_view.temporal,
+        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+    ) else {
+        return;
+    };
+    let size = textures.near_occlusion.texture.size();
+    let step = ComputeStep {
+        label: "dynamic_ao_temporal",
+        pipeline: compute_pipeline,
+        bind_group: &bind_group.0,
+        offsets: &[view_offset.offset, settings_index.index()],
+        texels: UVec2::new(size.width, size.height),
+    };
+    record_passes(&mut ctx, "dynamic_ao_temporal", true, &[step]);
+}

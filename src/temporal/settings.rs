@@ -1,0 +1,58 @@
+//! The settings of temporal accumulation, a part of [`DynamicAo`](crate::DynamicAo).
+
+use bevy::reflect::{Reflect, std_traits::ReflectDefault};
+
+/// Default most frames a pixel's history averages.
+pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
+
+/// Temporal accumulation of the image-space occlusion: the sample pattern moves every frame
+/// along a low-discrepancy sequence, and each frame's result is averaged with the pixel's
+/// history, found where the pixel was last frame through Bevy's motion vectors (so moving,
+/// skinned and morphed meshes reproject correctly). A history whose depth or normal does not
+/// match the pixel (a disocclusion) is dropped, and a history outside the range of the pixel's
+/// neighbours this frame is clamped into it (no ghost trails). With it on, the blur's radius is
+/// halved.
+///
+/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera. It works with and without
+/// Bevy's temporal anti-aliasing on the same camera.
+#[derive(Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Default, Clone, Debug, PartialEq)]
+pub struct AoTemporal {
+    /// Accumulate over frames. Default: `false`.
+    pub enabled: bool,
+    /// Most frames a pixel's history averages: the noise falls as 1/√frames up to this, and a
+    /// change in the scene takes about this many frames to settle where the clamp does not catch
+    /// it. Valid: 1..=64. Default: [`DEFAULT_TEMPORAL_FRAMES`].
+    pub max_frames: u32,
+    /// Drop every pixel's history on the next frame (set it on a camera cut); the plugin sets it
+    /// back to `false`. The history is also dropped when the view's size or its other settings
+    /// change. Default: `false`.
+    pub reset: bool,
+}
+
+impl Default for AoTemporal {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            max_frames: DEFAULT_TEMPORAL_FRAMES,
+            reset: false,
+        }
+    }
+}
+
+impl AoTemporal {
+    /// Most frames a history may average.
+    pub const MAX_FRAMES: u32 = 64;
+
+    /// Accumulation on, with the default history length.
+    pub const ON: AoTemporal = AoTemporal {
+        enabled: true,
+        max_frames: DEFAULT_TEMPORAL_FRAMES,
+        reset: false,
+    };
+
+    /// The history length actually used.
+    pub fn frames(&self) -> u32 {
+        self.max_frames.clamp(1, Self::MAX_FRAMES)
+    }
+}

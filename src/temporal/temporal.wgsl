@@ -1,0 +1,120 @@
+// Temporal accumulation of the image-space occlusion: this frame's value joins the pixel's
+// history, found where the surface was last frame through Bevy's motion vectors. The history is
+// read bilinearly from the four texels around that place, each kept only where its depth and
+// normal match this surface (a disocclusion keeps none), and clamped into the range of this
+// frame's values around the pixel, so a change the motion vectors do not show leaves no trail.
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::nd_buffer::decode_normal
+
+struct TemporalUniform {
+    // 1: every history is dropped this frame.
+    reset: u32,
+    // Most frames a history averages.
+    max_frames: f32,
+}
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
+@group(0) @binding(2) var<uniform> temporal: TemporalUniform;
+// This frame's occlusion, as the image-space technique wrote it.
+@group(0) @binding(3) var current: texture_2d<f32>;
+@group(0) @binding(4) var front_depth: texture_depth_2d;
+@group(0) @binding(5) var front_normal: texture_2d<f32>;
+// Bevy's motion vectors: this frame's UV minus last frame's.
+@group(0) @binding(6) var motion_vectors: texture_2d<f32>;
+// Per texel: occlusion, linear depth and frames (as f32 bits) and the normal (4 × 8-bit snorm).
+@group(0) @binding(7) var history_in: texture_2d<u32>;
+@group(0) @binding(8) var history_out: texture_storage_2d<rgba32uint, write>;
+// The accumulated occlusion the filter and compose read.
+@group(0) @binding(9) var occlusion: texture_storage_2d<r32float, write>;
+
+// A history texel counts where its linear depth is within this share of the surface's...
+const DEPTH_TOLERANCE: f32 = 0.05;
+// ... and the cosine between its normal and the surface's is at least this.
+const NORMAL_AGREEMENT: f32 = 0.9;
+
+fn linear_depth(uv: vec2<f32>, depth: f32) -> f32 {
+    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return -p.z / p.w;
+}
+
+fn store(texel: vec2<i32>, value: f32, depth: f32, frames: f32, normal: vec3<f32>) {
+    let packed = vec4<u32>(
+        bitcast<u32>(value),
+        bitcast<u32>(depth),
+        bitcast<u32>(frames),
+        pack4x8snorm(vec4<f32>(normal, 0.0)),
+    );
+    textureStore(history_out, texel, packed);
+    textureStore(occlusion, texel, vec4<f32>(value));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = vec2<i32>(textureDimensions(current));
+    let texel = vec2<i32>(id.xy);
+    if any(texel >= dims) {
+        return;
+    }
+    let full = vec2<i32>(textureDimensions(front_depth));
+    let pixel = min(texel * i32(settings.resolution_scale), full - 1);
+    let value = textureLoad(current, texel, 0).r;
+    let depth = textureLoad(front_depth, pixel, 0);
+    let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
+    if depth <= 0.0 || dot(n, n) == 0.0 {
+        store(texel, value, 0.0, 0.0, vec3<f32>(0.0));
+        return;
+    }
+    let uv = (vec2<f32>(pixel) + 0.5) / vec2<f32>(full);
+    let z = linear_depth(uv, depth);
+
+    // The range of this frame's values around the texel.
+    var lo = value;
+    var hi = value;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let q = clamp(texel + vec2<i32>(dx, dy), vec2<i32>(0), dims - 1);
+            let v = textureLoad(current, q, 0).r;
+            lo = min(lo, v);
+            hi = max(hi, v);
+        }
+    }
+
+    var history = 0.0;
+    var frames = 0.0;
+    var weight = 0.0;
+    if temporal.reset == 0u {
+        let motion = textureLoad(motion_vectors, pixel, 0).xy;
+        let previous = (uv - motion) * vec2<f32>(dims) - 0.5;
+        let base = vec2<i32>(floor(previous));
+        let f = previous - floor(previous);
+        for (var i = 0u; i < 4u; i++) {
+            let corner = vec2<i32>(i32(i & 1u), i32(i >> 1u));
+            let q = base + corner;
+            if any(q < vec2<i32>(0)) || any(q >= dims) {
+                continue;
+            }
+            let h = textureLoad(history_in, q, 0);
+            let h_frames = bitcast<f32>(h.z);
+            let h_depth = bitcast<f32>(h.y);
+            let h_normal = unpack4x8snorm(h.w).xyz;
+            if h_frames <= 0.0 || abs(h_depth - z) > DEPTH_TOLERANCE * z
+                || dot(h_normal, n) < NORMAL_AGREEMENT {
+                continue;
+            }
+            let w = mix(1.0 - f.x, f.x, f32(corner.x)) * mix(1.0 - f.y, f.y, f32(corner.y));
+            history += w * bitcast<f32>(h.x);
+            frames += w * h_frames;
+            weight += w;
+        }
+    }
+    if weight < 0.01 {
+        store(texel, value, z, 1.0, n);
+        return;
+    }
+    let count = min(frames / weight + 1.0, temporal.max_frames);
+    let result = mix(clamp(history / weight, lo, hi), value, 1.0 / count);
+    store(texel, result, z, count, n);
+}

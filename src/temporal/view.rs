@@ -1,0 +1,142 @@
+//! The per-view state of temporal accumulation: the two history textures, which one is read this
+//! frame, whether the history is dropped, and whether the pass has compiled.
+
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::prelude::*;
+use bevy::image::ToExtents;
+use bevy::math::UVec2;
+use bevy::render::{
+    render_resource::{
+        PipelineCache, ShaderType, Texture, TextureDescriptor, TextureDimension, TextureFormat,
+        TextureUsages, TextureView, TextureViewDescriptor, UniformBuffer,
+    },
+    renderer::{RenderDevice, RenderQueue},
+};
+
+use super::pipeline::TemporalPipeline;
+use crate::settings::DynamicAo;
+use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
+
+/// Format of a history texel: occlusion, linear depth and frame count as f32 bits, and the
+/// normal as 4 × 8-bit snorm.
+const HISTORY_FORMAT: TextureFormat = TextureFormat::Rgba32Uint;
+
+/// `TemporalUniform` in `temporal.wgsl`.
+#[derive(ShaderType, Clone, Copy, Default)]
+pub(super) struct TemporalUniform {
+    pub reset: u32,
+    pub max_frames: f32,
+}
+
+/// A view's history, kept across frames.
+#[derive(Component)]
+pub(crate) struct TemporalHistory {
+    size: UVec2,
+    textures: [(Texture, TextureView); 2],
+    /// Which texture is read this frame; the other is written.
+    read: usize,
+    /// The camera's settings last frame: any change drops the history.
+    settings: DynamicAo,
+    pub(super) uniform: UniformBuffer<TemporalUniform>,
+}
+
+impl TemporalHistory {
+    /// The history this frame reads and the one it writes.
+    pub(super) fn views(&self) -> (&TextureView, &TextureView) {
+        (&self.textures[self.read].1, &self.textures[1 - self.read].1)
+    }
+}
+
+fn history_textures(device: &RenderDevice, size: UVec2) -> [(Texture, TextureView); 2] {
+    ["dynamic_ao_history_a", "dynamic_ao_history_b"].map(|label| {
+        let texture = device.create_texture(&TextureDescriptor {
+            label: Some(label),
+            size: size.to_extents(),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: TextureDimension::D2,
+            format: HISTORY_FORMAT,
+            usage: TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&TextureViewDescriptor::default());
+        (texture, view)
+    })
+}
+
+/// The settings that do not make the history stale when they change.
+fn history_key(settings: &DynamicAo) -> DynamicAo {
+    let mut key = settings.clone();
+    key.debug_view = false;
+    key.temporal.reset = false;
+    key
+}
+
+/// Makes, swaps or drops each view's history and writes its uniform.
+pub(crate) fn prepare_history(
+    mut commands: Commands,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    mut views: Query<(
+        Entity,
+        Option<&DynamicAoView>,
+        Option<&DynamicAoTextures>,
+        Option<&ViewPrepassTextures>,
+        Option<&mut TemporalHistory>,
+    )>,
+) {
+    for (entity, view, textures, prepass, history) in &mut views {
+        let (Some(view), Some(textures)) = (view.filter(|v| v.temporal), textures) else {
+            if history.is_some() {
+                commands.entity(entity).remove::<TemporalHistory>();
+            }
+            continue;
+        };
+        let size = textures.near_occlusion.texture.size();
+        let size = UVec2::new(size.width, size.height);
+        let key = history_key(&view.settings);
+        let motion = prepass.and_then(|p| p.motion_vectors_view()).is_some();
+        let mut reset = view.settings.temporal.reset || !motion;
+        let uniform = |reset: bool| TemporalUniform {
+            reset: u32::from(reset),
+            max_frames: view.settings.temporal.frames() as f32,
+        };
+        match history {
+            Some(history) if history.size == size => {
+                let history = history.into_inner();
+                history.read = 1 - history.read;
+                reset |= history.settings != key;
+                history.settings = key;
+                history.uniform.set(uniform(reset));
+                history.uniform.write_buffer(&device, &queue);
+            }
+            _ => {
+                // New textures hold no history yet.
+                let mut history = TemporalHistory {
+                    size,
+                    textures: history_textures(&device, size),
+                    read: 0,
+                    settings: key,
+                    uniform: UniformBuffer::default(),
+                };
+                history.uniform.set(uniform(true));
+                history.uniform.write_buffer(&device, &queue);
+                commands.entity(entity).insert(history);
+            }
+        }
+    }
+}
+
+/// The temporal pass counts until its pipeline has compiled.
+pub(crate) fn wait_for_temporal(
+    pipeline_cache: Res<PipelineCache>,
+    pipeline: Res<TemporalPipeline>,
+    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
+) {
+    let ready = pipeline_cache
+        .get_compute_pipeline(pipeline.pipeline)
+        .is_some();
+    for (view, mut pending) in &mut views {
+        pending.wait_for(!view.temporal || ready);
+    }
+}
