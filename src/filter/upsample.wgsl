@@ -2,7 +2,9 @@
 // 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
 // window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
 // difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
-// `reference::filter` is the CPU twin.
+// The window is the 2 × 2 texels that bracket x (those bilinear interpolation would read)
+// rather than 3 × 3: less than half the loads and position reconstructions, for the pass that
+// cost more than the half-resolution AO it upsampled. `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
@@ -51,11 +53,13 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let nearest = min(x / 2, low_dims - 1);
     let v_x = low_value(nearest);
     let h_x = v_x.x + v_x.y;
+    // Texel l was computed at pixel 2l: an odd x lies between l and l + 1, an even one on l.
+    let toward = select(vec2<i32>(-1), vec2<i32>(1), (x & vec2<i32>(1)) == vec2<i32>(1));
     var sum = vec2<f32>(0.0);
     var weights = 0.0;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let l = nearest + vec2<i32>(dx, dy);
+    for (var j = 0; j <= 1; j++) {
+        for (var i = 0; i <= 1; i++) {
+            let l = nearest + toward * vec2<i32>(i, j);
             // The full-resolution pixel each low-resolution texel was computed at.
             let y = l * 2;
             if any(l < vec2<i32>(0)) || any(l >= low_dims) || any(y >= dims) {

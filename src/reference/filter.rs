@@ -57,10 +57,12 @@ pub fn joint_bilateral_upsample_pair(
             let nearest = ((x / 2).min(lw - 1), (y / 2).min(lh - 1));
             let v_x = low[(nearest.1 * lw + nearest.0) as usize];
             let h_x = v_x[0] + v_x[1];
+            // The 2 × 2 texels that bracket the pixel: texel l was computed at pixel 2l.
+            let toward = |v: i32| if v & 1 == 1 { 1 } else { -1 };
             let (mut sum, mut weights) = ([0.0f32; 2], 0.0f32);
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (lx, ly) = (nearest.0 + dx, nearest.1 + dy);
+            for j in 0..=1 {
+                for i in 0..=1 {
+                    let (lx, ly) = (nearest.0 + toward(x) * i, nearest.1 + toward(y) * j);
                     let (qx, qy) = (lx * 2, ly * 2);
                     if lx < 0 || ly < 0 || lx >= lw || ly >= lh || qx >= w || qy >= h {
                         continue;
