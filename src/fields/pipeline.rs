@@ -4,7 +4,6 @@ use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{
             storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
@@ -12,14 +11,14 @@ use bevy::render::{
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use super::buffers::FieldBuffers;
 use crate::settings::FieldShading;
 use crate::view::{
-    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm,
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
 };
 
 /// The box pipelines: occlusion only (§3.2) and cone (§3.3.1).
@@ -112,8 +111,7 @@ pub(crate) fn prepare_field_bind_groups(
     render_device: Res<RenderDevice>,
     pipelines: Res<FieldPipelines>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     buffers: Res<FieldBuffers>,
     views: Query<(
         Entity,
@@ -122,11 +120,10 @@ pub(crate) fn prepare_field_bind_groups(
         &ViewPrepassTextures,
     )>,
 ) {
-    let (Some(view_binding), Some(instances), Some(cells), Some(settings_binding)) = (
-        view_uniforms.uniforms.binding(),
+    let (Some((view_binding, settings_binding)), Some(instances), Some(cells)) = (
+        bindings.get(),
         buffers.instances.binding(),
         buffers.cells.binding(),
-        settings.binding(),
     ) else {
         return;
     };

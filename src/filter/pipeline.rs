@@ -4,17 +4,18 @@ use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, ViewBindings,
+};
 
 /// The blur and upsampling pipelines for one kind of occlusion buffer.
 pub(crate) struct FilterPipelines {
@@ -202,8 +203,7 @@ pub(crate) fn prepare_blur_bind_groups(
     render_device: Res<RenderDevice>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     views: Query<(
         Entity,
         &DynamicAoTextures,
@@ -211,9 +211,7 @@ pub(crate) fn prepare_blur_bind_groups(
         &DynamicAoView,
     )>,
 ) {
-    let (Some(view_binding), Some(settings_binding)) =
-        (view_uniforms.uniforms.binding(), settings.binding())
-    else {
+    let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, textures, prepass, view) in &views {

@@ -4,18 +4,19 @@
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use crate::settings::AoTechnique;
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT};
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, ViewBindings,
+};
 
 /// One compute pipeline per image-space technique, over one layout.
 #[derive(Resource)]
@@ -93,13 +94,10 @@ pub(super) fn prepare_image_space_bind_groups(
     render_device: Res<RenderDevice>,
     pipelines: Res<ImageSpacePipelines>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     views: Query<(Entity, &DynamicAoTextures, &ViewPrepassTextures), With<DynamicAoView>>,
 ) {
-    let (Some(view_binding), Some(settings_binding)) =
-        (view_uniforms.uniforms.binding(), settings.binding())
-    else {
+    let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, textures, prepass) in &views {

@@ -4,7 +4,6 @@ use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{
             storage_buffer_read_only_sized, texture_2d, texture_depth_2d, uniform_buffer,
@@ -12,13 +11,13 @@ use bevy::render::{
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use super::buffers::SphereBuffer;
 use crate::view::{
-    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm,
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
 };
 
 /// The billboard pipeline: instanced quads, multiplying the far-field visibility buffer by
@@ -95,8 +94,7 @@ pub(crate) fn prepare_splat_bind_groups(
     render_device: Res<RenderDevice>,
     pipeline: Res<SplatPipeline>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     spheres: Res<SphereBuffer>,
     views: Query<(
         Entity,
@@ -105,11 +103,9 @@ pub(crate) fn prepare_splat_bind_groups(
         &ViewPrepassTextures,
     )>,
 ) {
-    let (Some(view_binding), Some(sphere_binding), Some(settings_binding)) = (
-        view_uniforms.uniforms.binding(),
-        spheres.buffer.binding(),
-        settings.binding(),
-    ) else {
+    let (Some((view_binding, settings_binding)), Some(sphere_binding)) =
+        (bindings.get(), spheres.buffer.binding())
+    else {
         return;
     };
     for (entity, view, textures, prepass) in &views {

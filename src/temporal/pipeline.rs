@@ -4,18 +4,17 @@ use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use super::view::{TemporalHistory, TemporalUniform};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, OCCLUSION_FORMAT};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, OCCLUSION_FORMAT, ViewBindings};
 
 /// The accumulation pipeline.
 #[derive(Resource)]
@@ -68,8 +67,7 @@ pub(crate) fn prepare_temporal_bind_groups(
     render_device: Res<RenderDevice>,
     pipeline: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     views: Query<(
         Entity,
         &DynamicAoTextures,
@@ -77,9 +75,7 @@ pub(crate) fn prepare_temporal_bind_groups(
         &TemporalHistory,
     )>,
 ) {
-    let (Some(view_binding), Some(settings_binding)) =
-        (view_uniforms.uniforms.binding(), settings.binding())
-    else {
+    let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, textures, prepass, history) in &views {

@@ -9,8 +9,12 @@
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::ecs::prelude::*;
+use bevy::ecs::system::SystemParam;
 use bevy::image::ToExtents;
 use bevy::math::UVec2;
+use bevy::render::extract_component::ComponentUniforms;
+use bevy::render::render_resource::BindingResource;
+use bevy::render::view::ViewUniforms;
 use bevy::render::{
     ExtractSchedule, Render, RenderSystems,
     camera::ExtractedCamera,
@@ -157,6 +161,23 @@ impl PendingPasses {
 
     pub fn all_ready(&self) -> bool {
         self.0 == 0
+    }
+}
+
+/// The two uniforms nearly every pass binds first: Bevy's view uniform and ours.
+#[derive(SystemParam)]
+pub(crate) struct ViewBindings<'w> {
+    view_uniforms: Res<'w, ViewUniforms>,
+    settings: Res<'w, ComponentUniforms<DynamicAoUniform>>,
+}
+
+impl ViewBindings<'_> {
+    /// Both bindings, once both buffers exist this frame.
+    pub fn get(&self) -> Option<(BindingResource<'_>, BindingResource<'_>)> {
+        Some((
+            self.view_uniforms.uniforms.binding()?,
+            self.settings.binding()?,
+        ))
     }
 }
 

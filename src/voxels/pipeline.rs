@@ -4,7 +4,6 @@ use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
         binding_types::{
             storage_buffer_read_only_sized, storage_buffer_sized, texture_2d, texture_depth_2d,
@@ -13,14 +12,16 @@ use bevy::render::{
         *,
     },
     renderer::RenderDevice,
-    view::{ViewUniform, ViewUniforms},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
 use super::view::VoxelTextures;
 use crate::filter::{BlurBindGroups, BlurPipelines, FilterInputs, OCCLUSION_PAIR_FORMAT};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm, ViewBindings,
+};
 
 /// The voxelization and sampling pipelines.
 #[derive(Resource)]
@@ -101,8 +102,7 @@ pub(crate) fn prepare_voxel_bind_groups(
     pipelines: Res<VoxelPipelines>,
     blur: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
-    view_uniforms: Res<ViewUniforms>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     views: Query<(
         Entity,
         &DynamicAoView,
@@ -131,9 +131,7 @@ pub(crate) fn prepare_voxel_bind_groups(
             params.clone(),
         )),
     ));
-    let (Some(view_binding), Some(settings_binding)) =
-        (view_uniforms.uniforms.binding(), settings.binding())
-    else {
+    let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, view, textures, voxel_textures, outputs, prepass) in &views {
