@@ -62,7 +62,7 @@ impl Plugin for TemporalPlugin {
                 Render,
                 (
                     view::prepare_history.in_set(RenderSystems::PrepareResources),
-                    view::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
+                    node::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_temporal_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                 ),
             )

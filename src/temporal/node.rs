@@ -1,4 +1,5 @@
-//! The temporal pass of a view: one dispatch over its occlusion buffer.
+//! The temporal pass of a view (one dispatch over its occlusion buffer), and the count of views
+//! waiting for it to compile.
 
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
@@ -11,7 +12,7 @@ use bevy::render::{
 
 use super::pipeline::{TemporalBindGroup, TemporalPipeline};
 use crate::dispatch::{ComputeStep, record_passes};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, PendingPasses};
 
 pub(crate) fn temporal_pass(
     view: ViewQuery<(
@@ -41,4 +42,18 @@ pub(crate) fn temporal_pass(
         texels: UVec2::new(size.width, size.height),
     };
     record_passes(&mut ctx, "dynamic_ao_temporal", true, &[step]);
+}
+
+/// The temporal pass counts until its pipeline has compiled.
+pub(crate) fn wait_for_temporal(
+    pipeline_cache: Res<PipelineCache>,
+    pipeline: Res<TemporalPipeline>,
+    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
+) {
+    let ready = pipeline_cache
+        .get_compute_pipeline(pipeline.pipeline)
+        .is_some();
+    for (view, mut pending) in &mut views {
+        pending.wait_for(!view.temporal || ready);
+    }
 }

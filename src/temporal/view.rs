@@ -1,5 +1,6 @@
 //! The per-view state of temporal accumulation: the two history textures, which one is read this
-//! frame, whether the history is dropped, and whether the pass has compiled.
+//! frame, and whether the history is dropped (whether the pass has compiled is counted in
+//! `node.rs`).
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
@@ -7,15 +8,14 @@ use bevy::image::ToExtents;
 use bevy::math::UVec2;
 use bevy::render::{
     render_resource::{
-        PipelineCache, ShaderType, Texture, TextureDescriptor, TextureDimension, TextureFormat,
-        TextureUsages, TextureView, TextureViewDescriptor, UniformBuffer,
+        ShaderType, Texture, TextureDescriptor, TextureDimension, TextureFormat, TextureUsages,
+        TextureView, TextureViewDescriptor, UniformBuffer,
     },
     renderer::{RenderDevice, RenderQueue},
 };
 
-use super::pipeline::TemporalPipeline;
 use crate::settings::DynamicAo;
-use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
+use crate::view::{DynamicAoTextures, DynamicAoView};
 
 /// Format of a history texel: occlusion, linear depth and frame count as f32 bits, and the
 /// normal as 4 × 8-bit snorm.
@@ -124,19 +124,5 @@ pub(crate) fn prepare_history(
                 commands.entity(entity).insert(history);
             }
         }
-    }
-}
-
-/// The temporal pass counts until its pipeline has compiled.
-pub(crate) fn wait_for_temporal(
-    pipeline_cache: Res<PipelineCache>,
-    pipeline: Res<TemporalPipeline>,
-    mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
-) {
-    let ready = pipeline_cache
-        .get_compute_pipeline(pipeline.pipeline)
-        .is_some();
-    for (view, mut pending) in &mut views {
-        pending.wait_for(!view.temporal || ready);
     }
 }
