@@ -13,8 +13,8 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// neighbours this frame is clamped into it (no ghost trails). With it on, the blur's radius is
 /// halved.
 ///
-/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera. It works with and without
-/// Bevy's temporal anti-aliasing on the same camera.
+/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera. It does not need Bevy's temporal
+/// anti-aliasing; the two together on one camera have not been tested yet.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
 pub struct AoTemporal {

@@ -7,7 +7,7 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     filter::cross_bilateral_blur,
-    metrics::{mean_bias, rmse},
+    metrics::{high_frequency_error, mean_bias, rmse},
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
@@ -140,6 +140,12 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
             );
         }
         println!("{name}: Bevy SSAO RMSE per level:{levels} (High below)");
+        let (w, h) = (ours.nd.width, ours.nd.height);
+        println!(
+            "{name}: high-frequency error (σ = 2 px): near-field {:.4}, Bevy SSAO {:.4}",
+            high_frequency_error(&ours.visibility, &truth, w, h, Some(&mask)),
+            high_frequency_error(&bevy.visibility, &truth, w, h, Some(&mask)),
+        );
         let ours_rmse = rmse(&ours.visibility, &truth, Some(&mask));
         let bevy_rmse = rmse(&bevy.visibility, &truth, Some(&mask));
         let ours_bias = mean_bias(&ours.visibility, &truth, Some(&mask));
