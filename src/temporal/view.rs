@@ -79,14 +79,19 @@ pub(crate) fn prepare_history(
     queue: Res<RenderQueue>,
     mut views: Query<(
         Entity,
-        Option<&DynamicAoView>,
+        &DynamicAoView,
         Option<&DynamicAoTextures>,
         Option<&ViewPrepassTextures>,
         Option<&mut TemporalHistory>,
     )>,
+    // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
+    stale: Query<Entity, (With<TemporalHistory>, Without<DynamicAoView>)>,
 ) {
+    for entity in &stale {
+        commands.entity(entity).remove::<TemporalHistory>();
+    }
     for (entity, view, textures, prepass, history) in &mut views {
-        let (Some(view), Some(textures)) = (view.filter(|v| v.temporal), textures) else {
+        let (true, Some(textures)) = (view.temporal, textures) else {
             if history.is_some() {
                 commands.entity(entity).remove::<TemporalHistory>();
             }

@@ -117,3 +117,23 @@ fn an_occluder_that_moves_away_leaves_no_trail() {
         "a trail of {left} pixels is left (of {was} that changed)"
     );
 }
+
+#[test]
+fn switching_accumulation_off_leaves_no_state_behind() {
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::new(&scene, noisy(false));
+    let plain = gpu.frame(2);
+    gpu.set_ao(|ao| *ao = noisy(true));
+    let accumulated = gpu.frame(12);
+    gpu.set_ao(|ao| *ao = noisy(false));
+    let again = gpu.frame(2);
+    let mask = plain.geometry_mask();
+    assert!(
+        rmse(&accumulated.visibility, &plain.visibility, Some(&mask)) > 0.01,
+        "accumulation changes the image"
+    );
+    assert_eq!(
+        again.visibility, plain.visibility,
+        "off again, the image is the plain one"
+    );
+}
