@@ -29,7 +29,7 @@ pub fn forget(store: &mut DiagnosticsStore) {
     }
 }
 
-/// The one line `--timings` prints: `ao_gpu_ms`, the mean per frame of the AO passes summed;
+/// The one line `--timings` prints on stdout (each pass's mean goes to stderr): `ao_gpu_ms`, the mean per frame of the AO passes summed;
 /// `frame_gpu_ms`, of every pass with a GPU time span; `frames`, how many frames the AO means
 /// are over (0, with `nan` times, where the adapter has no timestamp queries).
 pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
@@ -40,9 +40,8 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
             continue;
         };
         all += mean;
-        if std::env::var_os("AO_CAPTURE_SPANS").is_some() {
-            eprintln!("span {name}: {mean:.3} ms");
-        }
+        // Every pass on its own line on stderr; stdout keeps the one summary line.
+        eprintln!("timings: pass {name} {mean:.3} ms");
         if is_ao_pass(name, bevy_ssao) {
             ao += mean;
             let measured = diagnostic.history_len();

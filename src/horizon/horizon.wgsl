@@ -10,7 +10,7 @@
     view_position, view_position_at,
 }
 #import bevy_dynamic_ao::nd_buffer::pixel_world_size
-#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT, frame_offset}
+#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT, frame_offset, pixel_pattern}
 #import bevy_dynamic_ao::math::TAU
 
 const HALF_PI: f32 = 1.57079632679489662;
@@ -47,10 +47,11 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // Fewer steps where the radius covers fewer pixels: never two steps in one pixel.
     let steps = clamp(u32(radius_px), 1u, settings.horizon_steps);
     let step_px = radius_px / f32(steps);
-    let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x68bc21ebu));
+    let pattern = pixel_pattern(pixel, 0x68bc21ebu, settings.frame_index);
+    let hash = pattern.hash;
+    let rotation = pattern.rotation;
+    let pixel_jitter = pattern.jitter;
     let frame = frame_offset(settings.frame_index);
-    let rotation = fract(f32(hash) * HASH_TO_UNIT + frame.x);
-    let pixel_jitter = fract(f32(pcg_hash(hash)) * HASH_TO_UNIT + frame.y);
     let directions = settings.horizon_directions;
     let mode = settings.horizon_mode;
 

@@ -16,6 +16,7 @@ use bevy::render::{
 };
 
 use super::phase::BackFace3d;
+use crate::settings::AoTechnique;
 use crate::view::{DynamicAoTextures, DynamicAoView};
 
 pub(crate) fn back_face_pass(
@@ -30,7 +31,11 @@ pub(crate) fn back_face_pass(
     mut ctx: RenderContext,
 ) {
     let view_entity = view.entity();
-    let (camera, extracted_view, textures, _) = view.into_inner();
+    let (camera, extracted_view, textures, ao_view) = view.into_inner();
+    // Under Bevy's own SSAO none of our passes reads the layer.
+    if ao_view.technique() == AoTechnique::BevySsao {
+        return;
+    }
 
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();

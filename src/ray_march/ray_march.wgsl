@@ -5,7 +5,7 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
     view_position,
 }
-#import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT, frame_offset}
+#import bevy_dynamic_ao::sampling::pixel_pattern
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
 
 // Whether the view-space point `x` lies inside the geometry the two layers bound.
@@ -52,10 +52,9 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let t2 = frame[1];
 
     let radius = settings.image_space_radius;
-    let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ 0x2c1b3c6du));
-    let offset = frame_offset(settings.frame_index);
-    let rotation = fract(f32(hash) * HASH_TO_UNIT + offset.x);
-    let jitter = fract(f32(pcg_hash(hash)) * HASH_TO_UNIT + offset.y);
+    let pattern = pixel_pattern(pixel, 0x2c1b3c6du, settings.frame_index);
+    let rotation = pattern.rotation;
+    let jitter = pattern.jitter;
     let directions = settings.ray_march_directions;
     let elevations = settings.ray_march_elevations;
     var hits = 0u;

@@ -27,6 +27,24 @@ fn frame_offset(frame: u32) -> vec2<f32> {
     return fract(f32(frame & 1023u) * vec2<f32>(0.75487766624669276, 0.56984029099805327));
 }
 
+// A pixel's random pattern: its `hash` (salted per technique), and a rotation and a jitter in
+// [0, 1) drawn from it, both moved by frame `frame`'s offsets.
+struct PixelPattern {
+    hash: u32,
+    rotation: f32,
+    jitter: f32,
+}
+
+fn pixel_pattern(pixel: vec2<i32>, salt: u32, frame: u32) -> PixelPattern {
+    let hash = pcg_hash(u32(pixel.x) ^ pcg_hash(u32(pixel.y) ^ salt));
+    let offset = frame_offset(frame);
+    return PixelPattern(
+        hash,
+        fract(f32(hash) * HASH_TO_UNIT + offset.x),
+        fract(f32(pcg_hash(hash)) * HASH_TO_UNIT + offset.y),
+    );
+}
+
 // Sample `i` of `count` on a Vogel spiral filling a disk of `radius` pixels, rotated by
 // `rotation` with each ring shifted by `ring` (0.5: the spiral's own rings): evenly spread for
 // any count, so the count can follow the projected radius.

@@ -140,3 +140,53 @@ fn switching_accumulation_off_leaves_no_state_behind() {
         "off again, the image is the plain one: mean |diff| {mean}, 99th percentile {p99}"
     );
 }
+
+/// Accumulation on scenes set up as a user sets them up: every mesh a sphere occluder joined to
+/// the near field, boxes, a thin wall and a large floor, a box and a wall just outside the view,
+/// the project's skinned walker, at 0.75 m and 2 m. The accumulated near field with 8 samples a
+/// frame (a quarter of the default's) must stay as close to ground truth as the default. Prints
+/// the table of BENCHMARKS.md's temporal section.
+#[test]
+fn accumulation_holds_on_scenes_with_every_mesh_an_occluder() {
+    use crate::far_scenes::{self, FarRun};
+    use crate::far_terms::FarTerm;
+
+    let accumulated = |ao: &mut DynamicAo, near_field: NearFieldParams| {
+        ao.near_field = near_field;
+        ao.temporal = AoTemporal::ON;
+    };
+    let mut scenes = far_scenes::procedural();
+    scenes.push(far_scenes::walker_on_floor());
+    for scene in scenes {
+        let name = scene.name;
+        let mut run = FarRun::new(&scene, None);
+        let bvh = run.bvh();
+        for radius in [0.75, 2.0] {
+            let plain = run.render(
+                true,
+                Some(FarTerm::Spheres),
+                FarFieldBlend::CountOnce,
+                radius,
+            );
+            let truth = plain.ground_truth(&bvh, radius);
+            let mask = plain.geometry_mask();
+            let plain_error = rmse(&plain.visibility, &truth, Some(&mask));
+            run.gpu
+                .set_ao(|ao| accumulated(ao, AoPreset::Low.near_field()));
+            let eight = run.gpu.frame(30);
+            let eight_error = rmse(&eight.visibility, &truth, Some(&mask));
+            run.gpu
+                .set_ao(|ao| accumulated(ao, AoPreset::Medium.near_field()));
+            let sixteen = run.gpu.frame(30);
+            let sixteen_error = rmse(&sixteen.visibility, &truth, Some(&mask));
+            run.gpu.set_ao(|ao| ao.temporal = AoTemporal::default());
+            println!(
+                "| {name} | {radius} | {plain_error:.3} | {eight_error:.3} | {sixteen_error:.3} |"
+            );
+            assert!(
+                eight_error <= 1.05 * plain_error,
+                "{name}, R = {radius} m: accumulated 8 samples {eight_error} vs default {plain_error}"
+            );
+        }
+    }
+}
