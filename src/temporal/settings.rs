@@ -13,7 +13,9 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// neighbours this frame is clamped into it (no ghost trails). With it on, the blur's radius is
 /// halved.
 ///
-/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera. It does not need Bevy's temporal
+/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera, which stays when accumulation is
+/// turned off again (taking it away from a running camera stopped its rendering in our tests).
+/// It does not need Bevy's temporal
 /// anti-aliasing; the two together on one camera have not been tested yet.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
