@@ -9,7 +9,9 @@
 //! models come from `../shared/assets` (or `DYNAMIC_AO_SHARED_ASSETS`) and are skipped where
 //! that folder is absent. `-- --scenes a,b` runs the scenes whose names contain a word of the
 //! list; `-- --radii 0.75` picks radii; `-- --out DIR` writes each image as a 16-bit PNG;
-//! `-- --proxies` also compares each model's sphere-occluder proxies with the model itself.
+//! `-- --proxies` also compares each model's sphere-occluder proxies with the model itself;
+//! `-- --default` joins the far field to the crate's default image-space technique (the
+//! accumulated ray march at half resolution, read after 30 frames) instead of the near field.
 
 #[path = "../examples/common/mod.rs"]
 mod common;
@@ -159,6 +161,10 @@ fn main() {
             .and(shared.as_ref())
             .and_then(|p| p.to_str());
         let mut run = FarRun::new(&scene, folder);
+        if args.iter().any(|a| a == "--default") {
+            // The crate's default image-space technique in place of the near field.
+            run.image_space = DynamicAo::default();
+        }
         if args.iter().any(|a| a == "--proxies") {
             proxy_report(&mut run.gpu);
         }

@@ -193,6 +193,7 @@ fn main() {
         ("dynamic_ao_near_field", "near field"),
         ("dynamic_ao_horizon", "horizon"),
         ("dynamic_ao_ray_march", "ray march"),
+        ("dynamic_ao_temporal", "temporal"),
         ("dynamic_ao_upsample", "upsample"),
         ("dynamic_ao_blur", "blur"),
         ("dynamic_ao_spheres", "spheres"),

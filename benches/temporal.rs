@@ -30,17 +30,27 @@ fn configurations() -> Vec<(&'static str, DynamicAo)> {
         temporal: AoTemporal::ON,
         ..ao
     };
+    let near_field = DynamicAo {
+        technique: AoTechnique::NearField,
+        half_resolution: false,
+        temporal: AoTemporal::OFF,
+        ..default()
+    };
     vec![
-        ("ours, default", DynamicAo::default()),
+        ("ours, default (accumulated)", DynamicAo::default()),
         (
-            "ours, default, accumulated",
-            accumulated(DynamicAo::default()),
+            "ours, default with accumulation off",
+            DynamicAo {
+                temporal: AoTemporal::OFF,
+                ..default()
+            },
         ),
+        ("ours, near field 32 samples", near_field.clone()),
         (
             "ours, near field 8 samples, accumulated",
             accumulated(DynamicAo {
                 near_field: AoPreset::Low.near_field(),
-                ..default()
+                ..near_field
             }),
         ),
         ("ours, preset low", DynamicAo::from_preset(AoPreset::Low)),

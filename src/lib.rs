@@ -18,8 +18,10 @@
 //!
 //! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer; our
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
-//! 2. [`near_field`] computes image-space occlusion from both layers (S&A eq. 2–4), or
-//!    [`horizon`] computes horizon-based occlusion from the front layer (Bavoil & Sainz 2008).
+//! 2. [`ray_march`] (the default) marches a few rays per pixel through both layers at half
+//!    resolution (Bavoil & Sainz 2008), and [`temporal`] accumulates them over frames through
+//!    Bevy's motion vectors; or [`near_field`] computes image-space occlusion from both layers
+//!    (S&A eq. 2–4), or [`horizon`] horizon-based occlusion from the front layer.
 //! 3. [`spheres`] adds far-field occlusion from the proxies (boxes, or the paper's spheres) of
 //!    every [`SphereOccluder`](spheres::SphereOccluder), refit each frame to skinned and morphed
 //!    meshes (S&A §5), [`fields`] from the precomputed AO field of every

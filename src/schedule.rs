@@ -53,6 +53,9 @@ pub(crate) enum DynamicAoExtract {
     Occluders,
     /// The settings and uniform of each view, which switch off the terms without occluders.
     Views,
+    /// One-frame requests the views have read (a temporal reset) are cleared in the main world,
+    /// as Bevy's TAA clears its own: after extraction, so none is lost whenever it was set.
+    Consumed,
 }
 
 /// Preparation steps of the plugin that need an order in Bevy's [`Render`] schedule.
@@ -121,7 +124,12 @@ pub(crate) fn configure(app: &mut App) {
     render_app.configure_sets(
         ExtractSchedule,
         // A view's uniform leaves out the far-field terms that have no occluders.
-        DynamicAoExtract::Occluders.before(DynamicAoExtract::Views),
+        (
+            DynamicAoExtract::Occluders,
+            DynamicAoExtract::Views,
+            DynamicAoExtract::Consumed,
+        )
+            .chain(),
     );
     render_app.configure_sets(
         Render,

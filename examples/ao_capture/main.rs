@@ -5,12 +5,14 @@
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
-//!     [--time SECONDS] [--temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
+//!     [--time SECONDS] [--temporal|--no-temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
-//! preset, `DynamicAo::default()`). `--frames N` renders N frames with a still camera before the
-//! capture. `--timings` then prints one line, `timings: ao_gpu_ms=<mean GPU ms of the AO passes>
+//! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
+//! temporal accumulation (on above `low`; `--temporal` and `--no-temporal` override it).
+//! `--frames N` renders N frames with a still camera before the capture (default: 4, or 32
+//! where the occlusion is accumulated, twice its history, so the capture shows it converged). `--timings` then prints one line, `timings: ao_gpu_ms=<mean GPU ms of the AO passes>
 //! frame_gpu_ms=<all passes> frames=<n>`, over the frames rendered once the scene was ready (for
 //! `bevy-ssao` the AO pass is Bevy's own).
 //!
@@ -220,11 +222,7 @@ fn scene_ready(
             fields: options.far == Some(FarTerm::Fields),
             voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
-            temporal: if options.temporal {
-                AoTemporal::ON
-            } else {
-                AoTemporal::default()
-            },
+            temporal: options.temporal,
             // Every technique's budget at the chosen level.
             ..DynamicAo::from_preset(options.preset)
         },

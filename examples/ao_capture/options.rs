@@ -2,15 +2,16 @@
 
 use std::path::PathBuf;
 
+use bevy_dynamic_ao::settings::DEFAULT_TEMPORAL_FRAMES;
 use bevy_dynamic_ao::voxels::VoxelFalloff;
-use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, FarFieldBlend};
+use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, AoTemporal, FarFieldBlend};
 
 use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -76,12 +77,14 @@ pub struct Options {
     pub blur: u32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
-    /// Frames rendered after the scene is posed, before the capture.
+    /// Frames rendered after the scene is posed, before the capture (default: 4, or twice the
+    /// history length where the occlusion is accumulated, so the capture shows it converged).
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,
-    /// Accumulate the image-space occlusion over the frames (`AoTemporal::ON`).
-    pub temporal: bool,
+    /// Accumulate the image-space occlusion over the frames: the level's choice, or
+    /// `--temporal` / `--no-temporal`.
+    pub temporal: AoTemporal,
     /// Print the mean GPU time of the AO passes and of all passes after the capture.
     pub timings: bool,
     pub out_ao: PathBuf,
@@ -106,10 +109,10 @@ impl Options {
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
         let (mut scene, mut width, mut height, mut radius, mut technique) =
             (None, None, None, None, None);
-        let (mut preset, mut frames, mut time) = (AoPreset::High, 4u32, 0.0f32);
+        let (mut preset, mut frames, mut time) = (AoPreset::default(), None, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut half_resolution = false;
-        let (mut default_technique, mut timings, mut temporal) = (false, false, false);
+        let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color) = (None, None);
@@ -155,7 +158,8 @@ impl Options {
                 }
                 "--half-res" => half_resolution = true,
                 "--timings" => timings = true,
-                "--temporal" => temporal = true,
+                "--temporal" => temporal = Some(AoTemporal::ON),
+                "--no-temporal" => temporal = Some(AoTemporal::OFF),
                 "--far-blend" => {
                     let name = value()?;
                     far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
@@ -173,7 +177,7 @@ impl Options {
                         }
                     }
                 }
-                "--frames" => frames = parse_number("--frames", &value()?, 1u32)?,
+                "--frames" => frames = Some(parse_number("--frames", &value()?, 1u32)?),
                 "--blur" => {
                     blur = parse_number("--blur", &value()?, 0u32)?;
                     if blur > AoBlur::MAX_RADIUS {
@@ -230,14 +234,20 @@ impl Options {
                 .ok_or_else(|| missing("--technique"))?,
             default_technique,
             timings,
-            temporal,
+            temporal: temporal.unwrap_or(preset.temporal()),
             far: technique.and_then(|(_, far)| far),
             far_blend,
             voxel_falloff,
             preset,
             blur,
             half_resolution,
-            frames,
+            frames: frames.unwrap_or_else(|| {
+                if temporal.unwrap_or(preset.temporal()).enabled {
+                    2 * DEFAULT_TEMPORAL_FRAMES
+                } else {
+                    4
+                }
+            }),
             time,
             out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,
             out_color,

@@ -282,12 +282,13 @@ pub fn fail_without_required_asset(
     }
 }
 
-/// Keys the far-field examples share: N switches the near field, D the debug view.
+/// Keys the far-field examples share: N switches the image-space term (the default technique)
+/// on and off, D the debug view.
 pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dynamic_ao::DynamicAo) {
     use bevy_dynamic_ao::AoTechnique;
     if keys.just_pressed(KeyCode::KeyN) {
         ao.technique = match ao.technique {
-            AoTechnique::Off => AoTechnique::NearField,
+            AoTechnique::Off => AoTechnique::default(),
             _ => AoTechnique::Off,
         };
     }

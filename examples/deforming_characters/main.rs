@@ -20,7 +20,7 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
 [--width W] [--height H] [--characters N] [--show-spheres] [--voxels] [--show-voxels] [--debug-view]
-keys: N near field on/off, F far field (spheres) on/off, V voxel volumes on/off, M blend (count once/add/max),
+keys: N image-space AO on/off, F far field (spheres) on/off, V voxel volumes on/off, M blend (count once/add/max),
       S show spheres, O show occupied voxels, D debug view, Esc quit";
 
 const WALKER: &str = "characters/walker.glb";
@@ -286,7 +286,7 @@ fn show_settings(
     text.0 = format!(
         "near field {} | spheres {} ({spheres}, {:?}) | voxels {} ({} volumes) | show spheres {} \
          | show voxels {} | debug view {}\n\
-         N near field  F spheres  V voxels  M blend (count once/add/max)  S show spheres  O show voxels  \
+         N image-space AO  F spheres  V voxels  M blend (count once/add/max)  S show spheres  O show voxels  \
          D debug view  Esc quit",
         on(ao.technique != AoTechnique::Off),
         on(ao.spheres),

@@ -19,7 +19,7 @@ use common::{ExampleArgs, HelpLine};
 
 const USAGE: &str = "usage: toasters [--headless] [--frames N] [--out FILE.png] [--width W] \
 [--height H] [--stress N] [--debug-view]
-keys: N near field on/off, F fields on/off, C cone / occlusion-only shading, D debug view, Esc quit";
+keys: N image-space AO on/off, F fields on/off, C cone / occlusion-only shading, D debug view, Esc quit";
 
 const SCENE: &str = "scenes/toasters.glb";
 
@@ -217,7 +217,7 @@ fn show_settings(
     let on = |b: bool| if b { "on" } else { "off" };
     text.0 = format!(
         "near field {} | fields {} ({} occluders, {:?}) | debug view {}\n\
-         N near field  F fields  C cone / occlusion only  D debug view  Esc quit",
+         N image-space AO  F fields  C cone / occlusion only  D debug view  Esc quit",
         on(ao.technique != AoTechnique::Off),
         on(ao.fields),
         fields.iter().count(),

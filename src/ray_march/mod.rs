@@ -1,13 +1,19 @@
-//! Ray-marched ambient occlusion through both ND-buffer layers: the in-engine reference
-//! (Bavoil & Sainz 2008, "Ray-Marched Ambient Occlusion").
+//! Ray-marched ambient occlusion through both ND-buffer layers (Bavoil & Sainz 2008,
+//! "Ray-Marched Ambient Occlusion"): the default technique.
 //!
 //! From each pixel, `directions × elevations` rays leave over the hemisphere around the
 //! normal, stratified so that they follow the cosine weighting of the AO integral; each is
-//! marched in `steps` equal steps over the radius R. A step is blocked where it lies behind the
-//! front layer and in front of the back-face layer at the pixel it projects to (inside a solid),
-//! or, where no back face was drawn there, less than R behind the front layer. The occlusion is
-//! the fraction of blocked rays. Costly, but its error against ray-traced ground truth shrinks as
-//! the ray count grows. `reference::ray_march` is the CPU twin.
+//! marched in `steps` equal steps over the radius R, starting one pixel's width above the surface
+//! (a surface seen at a grazing angle changes depth within a pixel by as much as a point half a
+//! pixel's width above it is nearer, so lower steps would read as hidden). A step is blocked
+//! where it lies behind the front layer and in front of the back-face layer at the pixel it
+//! projects to (inside a solid), or, where no back face was drawn there, less than R behind the
+//! front layer. The occlusion is the fraction of blocked rays: what a ray tracer measures, for
+//! the geometry the two layers hold. Its error against ray-traced ground truth shrinks as the
+//! ray count grows; under temporal accumulation the rays' rotation, elevations and step offsets
+//! move every frame, so two rays per pixel and frame at half resolution converge to what many
+//! more give in one frame (see [`AoPreset`](crate::AoPreset)). `reference::ray_march` is the CPU
+//! twin (of a single frame).
 //!
 //! This folder holds the technique's settings (`settings.rs`) and shader (`ray_march.wgsl`). Its pass
 //! is shared with the other image-space techniques and lives in `src/image_space/`:

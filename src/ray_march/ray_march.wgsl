@@ -5,12 +5,41 @@
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
     view_position,
 }
-#import bevy_dynamic_ao::sampling::pixel_pattern
+#import bevy_dynamic_ao::sampling::{pixel_pattern, frame_jitter}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
 
-// Whether the view-space point `x` lies inside the geometry the two layers bound.
-fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
-    let clip = view.clip_from_view * vec4<f32>(x, 1.0);
+// The two rows of `view.view_from_clip` that give a view-space depth: a step needs only the
+// depth of the surface it is compared with, two dot products instead of a whole unprojection.
+struct DepthRows {
+    z: vec4<f32>,
+    w: vec4<f32>,
+}
+
+fn depth_rows() -> DepthRows {
+    let m = view.view_from_clip;
+    return DepthRows(
+        vec4<f32>(m[0].z, m[1].z, m[2].z, m[3].z),
+        vec4<f32>(m[0].w, m[1].w, m[2].w, m[3].w),
+    );
+}
+
+// View-space z of the centre of `pixel` at reverse-Z depth `depth`.
+fn view_z(rows: DepthRows, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> f32 {
+    let uv = (vec2<f32>(pixel) + 0.5) / size;
+    let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return dot(rows.z, ndc) / dot(rows.w, ndc);
+}
+
+// Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
+// geometry the two layers bound.
+fn blocked(
+    z: f32,
+    clip: vec4<f32>,
+    rows: DepthRows,
+    size: vec2<f32>,
+    dims: vec2<i32>,
+    radius: f32,
+) -> i32 {
     if clip.w <= 0.0 {
         return -1;
     }
@@ -24,16 +53,16 @@ fn blocked(x: vec3<f32>, size: vec2<f32>, dims: vec2<i32>, radius: f32) -> i32 {
     if front <= 0.0 {
         return 0;
     }
-    let front_z = view_position(q, size, front).z;
+    let front_z = view_z(rows, q, size, front);
     // A small tolerance keeps the receiver's own surface from blocking it.
-    if x.z > front_z - 0.01 * radius {
+    if z > front_z - 0.01 * radius {
         return 0;
     }
     let back = textureLoad(back_depth, q, 0);
     if back > 0.0 {
-        return select(0, 1, x.z > view_position(q, size, back).z);
+        return select(0, 1, z > view_z(rows, q, size, back));
     }
-    return select(0, 1, front_z - x.z < radius);
+    return select(0, 1, front_z - z < radius);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -55,6 +84,17 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let pattern = pixel_pattern(pixel, 0x2c1b3c6du, settings.frame_index);
     let rotation = pattern.rotation;
     let jitter = pattern.jitter;
+    // Where along each step a sample sits: under accumulation it moves every frame, so a few
+    // steps per frame add up to a fine march.
+    let step_offset = frame_jitter(pattern.hash, settings.frame_index);
+    let rows = depth_rows();
+    // Rays start one pixel's width above the surface. A surface seen at a grazing angle (a floor
+    // far off) changes depth within a pixel by as much as a point half a pixel's width above it
+    // is nearer, so a step lower than that reads as behind the pixel centre's depth.
+    let footprint = 2.0 * (view.clip_from_view * vec4<f32>(p, 1.0)).w
+        / (size.x * view.clip_from_view[0][0]);
+    let origin = p + n * footprint;
+    let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
     let directions = settings.ray_march_directions;
     let elevations = settings.ray_march_elevations;
     var hits = 0u;
@@ -66,9 +106,12 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
             let sin_theta = sqrt(u);
             let cos_theta = sqrt(1.0 - u);
             let dir = t1 * (sin_theta * cos(phi)) + t2 * (sin_theta * sin(phi)) + n * cos_theta;
+            // Clip space is linear in view space: each step adds to the receiver's clip position.
+            let clip_dir = view.clip_from_view * vec4<f32>(dir, 0.0);
             for (var s = 0u; s < settings.ray_march_steps; s++) {
-                let t = (f32(s) + 0.5) / f32(settings.ray_march_steps) * radius;
-                let state = blocked(p + dir * t, size, dims, radius);
+                let t = (f32(s) + step_offset) / f32(settings.ray_march_steps) * radius;
+                let z = origin.z + dir.z * t;
+                let state = blocked(z, clip + clip_dir * t, rows, size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);
                     break;

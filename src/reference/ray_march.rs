@@ -91,6 +91,10 @@ pub fn pixel_occlusion(
         .normalize();
     let frame = tangent_frame(n);
     let (t1, t2) = (frame.x_axis, frame.y_axis);
+    // One pixel's width above the surface, as the shader starts its rays.
+    let footprint = 2.0 * (view.clip_from_view * p.extend(1.0)).w
+        / (nd.width as f32 * view.clip_from_view.x_axis.x);
+    let origin = p + n * footprint;
     let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x2c1b_3c6d));
     let rotation = hash as f32 * HASH_TO_UNIT;
     let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
@@ -103,7 +107,7 @@ pub fn pixel_occlusion(
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
             for s in 0..inputs.steps {
                 let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
-                let state = blocked(nd, view, p + dir * t, inputs.radius);
+                let state = blocked(nd, view, origin + dir * t, inputs.radius);
                 if state != 0 {
                     hits += u32::from(state == 1);
                     break;

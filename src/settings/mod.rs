@@ -37,7 +37,8 @@ pub const DEFAULT_INTENSITY: f32 = 1.0;
 #[reflect(Component, Default, Clone, Debug, PartialEq)]
 #[require(ScreenSpaceAmbientOcclusion)]
 pub struct DynamicAo {
-    /// Which technique computes the occlusion. Default: [`AoTechnique::NearField`].
+    /// Which technique computes the occlusion. Default: [`AoTechnique::RayMarch`] (the
+    /// technique of [`AoPreset::High`]).
     pub technique: AoTechnique,
     /// Parameters of [`AoTechnique::NearField`]: its sample budget and whether the back-face
     /// layer occludes. Default: [`NearFieldParams::default`] (the budget of [`AoPreset::High`]).
@@ -73,11 +74,12 @@ pub struct DynamicAo {
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
     /// Temporal accumulation of the image-space occlusion. Default: [`AoTemporal::default`]
-    /// (off).
+    /// (on, as every level above [`AoPreset::Low`] has it).
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
-    /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `false`.
+    /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `true` (as
+    /// [`AoPreset::High`] has it).
     pub half_resolution: bool,
     /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)'s
     /// proxies in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are
@@ -116,7 +118,7 @@ impl Default for DynamicAo {
             ray_march: RayMarchParams::default(),
             blur: AoBlur::default(),
             temporal: AoTemporal::default(),
-            half_resolution: false,
+            half_resolution: true,
             spheres: true,
             far_field_blend: FarFieldBlend::CountOnce,
             fields: true,
@@ -248,11 +250,13 @@ pub enum AoTechnique {
     /// [`DynamicAo::spheres`] is on (with it off, visibility is 1 everywhere).
     Off,
     /// Image-space near-field AO from the two-layer ND-buffer (Shanmugam & Arikan 2007, §4).
-    #[default]
     NearField,
     /// Horizon-based AO on the front layer (Bavoil & Sainz 2008).
     Horizon,
-    /// Brute-force rays marched through both ND-buffer layers: the in-engine reference.
+    /// Rays marched through both ND-buffer layers (Bavoil & Sainz 2008): cosine-weighted rays
+    /// that count a hit within R, what a ray tracer measures. With a few rays per frame,
+    /// accumulated over frames, it is the default (see [`AoPreset`]).
+    #[default]
     RayMarch,
     /// Bevy's built-in SSAO, left running unchanged (for comparison).
     BevySsao,
@@ -271,6 +275,15 @@ impl AoTechnique {
     /// The technique with this command-line name, if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    }
+
+    /// Whether this is one of the plugin's image-space techniques (near field, horizon, ray
+    /// march): the ones temporal accumulation, half resolution and the blur apply to.
+    pub fn is_image_space(self) -> bool {
+        matches!(
+            self,
+            AoTechnique::NearField | AoTechnique::Horizon | AoTechnique::RayMarch
+        )
     }
 
     /// The command-line name of this technique.

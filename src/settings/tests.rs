@@ -3,7 +3,9 @@ use super::*;
 #[test]
 fn defaults_are_the_high_level() {
     let ao = DynamicAo::default();
-    assert_eq!(ao.technique, AoTechnique::NearField);
+    assert_eq!(ao.technique, AoTechnique::RayMarch);
+    assert_eq!(ao.temporal, AoPreset::High.temporal());
+    assert!(ao.half_resolution);
     assert_eq!(ao.near_field, AoPreset::High.near_field());
     assert_eq!(ao.horizon, AoPreset::High.horizon());
     assert_eq!(ao.ray_march, AoPreset::High.ray_march());
@@ -25,9 +27,9 @@ fn each_level_picks_its_technique() {
         picked,
         [
             (AoTechnique::Horizon, true),
-            (AoTechnique::Horizon, false),
-            (AoTechnique::NearField, false),
-            (AoTechnique::RayMarch, false),
+            (AoTechnique::RayMarch, true),
+            (AoTechnique::RayMarch, true),
+            (AoTechnique::RayMarch, true),
         ]
     );
 }
@@ -47,6 +49,14 @@ fn levels_grow_in_cost() {
         })
         .collect();
     assert!(horizon.windows(2).all(|w| w[0] < w[1]), "{horizon:?}");
+    let rays: Vec<u32> = AoPreset::ALL
+        .iter()
+        .map(|p| {
+            let r = p.ray_march();
+            r.directions * r.elevations * r.steps
+        })
+        .collect();
+    assert!(rays.windows(2).all(|w| w[0] < w[1]), "{rays:?}");
 }
 
 #[test]

@@ -29,15 +29,15 @@ mod pipeline;
 pub mod settings;
 mod view;
 
-use bevy::app::{App, Last, Plugin, PostUpdate};
+use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::prepass::MotionVectorPrepass;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
-use bevy::render::{GpuResourceAppExt, Render, RenderSystems};
+use bevy::render::{ExtractSchedule, GpuResourceAppExt, MainWorld, Render, RenderSystems};
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 use crate::settings::DynamicAo;
 pub use settings::AoTemporal;
 
@@ -48,8 +48,7 @@ impl Plugin for TemporalPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "temporal.wgsl");
         app.register_type::<AoTemporal>()
-            .add_systems(PostUpdate, require_motion_vectors)
-            .add_systems(Last, clear_reset);
+            .add_systems(PostUpdate, require_motion_vectors);
     }
 
     fn finish(&self, app: &mut App) {
@@ -67,6 +66,10 @@ impl Plugin for TemporalPlugin {
                 ),
             )
             .add_systems(
+                ExtractSchedule,
+                clear_reset.in_set(DynamicAoExtract::Consumed),
+            )
+            .add_systems(
                 Core3d,
                 node::temporal_pass.in_set(DynamicAoSystems::Temporal),
             );
@@ -79,15 +82,18 @@ fn require_motion_vectors(
     cameras: Query<(Entity, &DynamicAo), Without<MotionVectorPrepass>>,
 ) {
     for (entity, ao) in &cameras {
-        if ao.temporal.enabled {
+        // Only our image-space techniques accumulate: Bevy's SSAO and the far field alone need
+        // no motion vectors.
+        if ao.temporal.enabled && ao.technique.is_image_space() {
             commands.entity(entity).insert(MotionVectorPrepass);
         }
     }
 }
 
-/// A reset lasts one frame (it was extracted in this frame's render).
-fn clear_reset(mut cameras: Query<&mut DynamicAo>) {
-    for mut ao in &mut cameras {
+/// A reset lasts one frame: cleared in the main world once this frame's views have read it.
+fn clear_reset(mut main_world: ResMut<MainWorld>) {
+    let mut cameras = main_world.query::<&mut DynamicAo>();
+    for mut ao in cameras.iter_mut(&mut main_world) {
         if ao.temporal.reset {
             ao.bypass_change_detection().temporal.reset = false;
         }

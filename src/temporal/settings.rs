@@ -13,6 +13,11 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// neighbours this frame is clamped into it (no ghost trails). With it on, the blur's radius is
 /// halved.
 ///
+/// On by default: the default technique traces 2 rays per pixel and frame and relies on it to
+/// reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
+/// noise pattern without motion vectors, and give the technique a budget that suffices in one
+/// frame (as [`AoPreset::Low`](crate::AoPreset::Low) does).
+///
 /// Turning it on adds Bevy's `MotionVectorPrepass` to the camera, which stays when accumulation is
 /// turned off again (taking it away from a running camera stopped its rendering in our tests).
 /// It does not need Bevy's temporal
@@ -20,7 +25,7 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
 pub struct AoTemporal {
-    /// Accumulate over frames. Default: `false`.
+    /// Accumulate over frames. Default: `true`.
     pub enabled: bool,
     /// Most frames a pixel's history averages: the noise falls as 1/√frames up to this, and a
     /// change in the scene takes about this many frames to settle where the clamp does not catch
@@ -34,11 +39,7 @@ pub struct AoTemporal {
 
 impl Default for AoTemporal {
     fn default() -> Self {
-        Self {
-            enabled: false,
-            max_frames: DEFAULT_TEMPORAL_FRAMES,
-            reset: false,
-        }
+        Self::ON
     }
 }
 
@@ -46,11 +47,18 @@ impl AoTemporal {
     /// Most frames a history may average.
     pub const MAX_FRAMES: u32 = 64;
 
-    /// Accumulation on, with the default history length.
+    /// Accumulation on, with the default history length (the default).
     pub const ON: AoTemporal = AoTemporal {
         enabled: true,
         max_frames: DEFAULT_TEMPORAL_FRAMES,
         reset: false,
+    };
+
+    /// Accumulation off: each frame's occlusion is used as it is (the sample pattern stands
+    /// still, and no motion vectors are needed).
+    pub const OFF: AoTemporal = AoTemporal {
+        enabled: false,
+        ..Self::ON
     };
 
     /// The history length actually used.

@@ -34,6 +34,13 @@ struct TemporalUniform {
 const DEPTH_TOLERANCE: f32 = 0.05;
 // ... and the cosine between its normal and the surface's is at least this.
 const NORMAL_AGREEMENT: f32 = 0.9;
+// How far outside the range of this frame's values around the pixel a history may lie. A frame
+// from a few rays reads 0 all around a pixel that is a few percent occluded; a clamp to that
+// range would pull every history toward no occlusion.
+const CLAMP_MARGIN: f32 = 0.05;
+// A history the clamp had to move saw a change: it counts as at most this many frames, so the
+// new value takes over within a few frames instead of `max_frames`.
+const CLAMPED_FRAMES: f32 = 4.0;
 
 fn linear_depth(uv: vec2<f32>, depth: f32) -> f32 {
     let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
@@ -87,7 +94,10 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     var weight = 0.0;
     if temporal.reset == 0u {
         let motion = textureLoad(motion_vectors, pixel, 0).xy;
-        let previous = (uv - motion) * vec2<f32>(dims) - 0.5;
+        // History texel t holds the surface at full-resolution pixel t × scale, so a place in
+        // the last frame maps back through that scale (at half resolution, a texel's centre is
+        // not its block's centre: mapping through the block would shift the history every frame).
+        let previous = ((uv - motion) * vec2<f32>(full) - 0.5) / f32(settings.resolution_scale);
         let base = vec2<i32>(floor(previous));
         let f = previous - floor(previous);
         for (var i = 0u; i < 4u; i++) {
@@ -114,7 +124,12 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         store(texel, value, z, 1.0, n);
         return;
     }
-    let count = min(frames / weight + 1.0, temporal.max_frames);
-    let result = mix(clamp(history / weight, lo, hi), value, 1.0 / count);
+    let previous = history / weight;
+    let clamped = clamp(previous, lo - CLAMP_MARGIN, hi + CLAMP_MARGIN);
+    var count = min(frames / weight + 1.0, temporal.max_frames);
+    if clamped != previous {
+        count = min(count, CLAMPED_FRAMES);
+    }
+    let result = mix(clamped, value, 1.0 / count);
     store(texel, result, z, count, n);
 }

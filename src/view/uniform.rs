@@ -99,8 +99,7 @@ pub(super) fn extract_views(
         let params = ao.near_field.sanitized();
         let mut blur = ao.blur.sanitized();
         let near_field = ao.technique == AoTechnique::NearField;
-        let image_space =
-            near_field || matches!(ao.technique, AoTechnique::Horizon | AoTechnique::RayMarch);
+        let image_space = ao.technique.is_image_space();
         let horizon = ao.horizon.sanitized();
         let rays = ao.ray_march.sanitized();
         // Bevy's own SSAO writes the AO texture itself, so nothing can be added to it.

@@ -5,6 +5,7 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::metrics::rmse;
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, SceneSpec};
 
 #[test]
@@ -20,7 +21,7 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
             Transform::from_xyz(0.0, 0.5, 0.0),
         );
     let with_back = |back_layer| {
-        DynamicAo::default()
+        plain_ao()
             .with_radius(radius)
             .with_near_field(NearFieldParams {
                 back_layer,
@@ -96,7 +97,7 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
 fn meshes_without_a_material_are_in_neither_layer() {
     let mut gpu = Gpu::new(
         &SceneSpec::new(Transform::from_xyz(0.0, 0.0, 3.0).looking_at(Vec3::ZERO, Vec3::Y)),
-        DynamicAo::default(),
+        plain_ao(),
     );
     let world = gpu.app.world_mut();
     let cube = world

@@ -7,6 +7,7 @@ use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, SceneSpec};
 use crate::scenes;
 
@@ -16,7 +17,7 @@ fn mean_luminance(image: &[Vec3]) -> f32 {
 
 #[test]
 fn msaa_camera_renders_without_ao() {
-    let mut gpu = Gpu::new(&scenes::cube_on_plane(), DynamicAo::default());
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), plain_ao());
     let camera = gpu.camera;
     gpu.app.world_mut().entity_mut(camera).insert(Msaa::Sample4);
     let image = gpu.color(6);
@@ -39,7 +40,7 @@ fn msaa_camera_renders_without_ao() {
 
 #[test]
 fn zero_size_viewport_does_not_panic() {
-    let mut gpu = Gpu::new(&scenes::cube_on_plane(), DynamicAo::default());
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), plain_ao());
     let camera = gpu.camera;
     gpu.app
         .world_mut()
@@ -95,7 +96,7 @@ fn mesh_without_normals_and_nan_transform_do_not_break_the_frame() {
             .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, vec![[0.0f32, 1.0, 0.0]; 3]),
             Transform::IDENTITY,
         );
-    let mut gpu = Gpu::new(&scene, DynamicAo::default());
+    let mut gpu = Gpu::new(&scene, plain_ao());
     let frame = gpu.frame(6);
     assert!(
         frame
@@ -122,7 +123,7 @@ fn bad_settings_fall_back_to_defaults() {
     let ao = DynamicAo {
         radius: f32::NAN,
         intensity: f32::INFINITY,
-        ..default()
+        ..plain_ao()
     };
     let mut gpu = Gpu::new(
         &SceneSpec {

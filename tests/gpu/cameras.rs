@@ -1,20 +1,18 @@
 //! Several cameras with different settings, and the debug view.
 
-use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
 use crate::harness::Gpu;
+use crate::harness::plain_ao;
 use crate::scenes;
 
 #[test]
 fn cameras_keep_their_own_settings() {
     let scene = scenes::cube_on_plane();
-    let mut gpu = Gpu::new(&scene, DynamicAo::default().with_radius(0.25));
-    let (wide, wide_readback) = gpu.add_camera(scene.camera, DynamicAo::default().with_radius(1.0));
-    let (off, off_readback) = gpu.add_camera(
-        scene.camera,
-        DynamicAo::default().with_technique(AoTechnique::Off),
-    );
+    let mut gpu = Gpu::new(&scene, plain_ao().with_radius(0.25));
+    let (wide, wide_readback) = gpu.add_camera(scene.camera, plain_ao().with_radius(1.0));
+    let (off, off_readback) =
+        gpu.add_camera(scene.camera, plain_ao().with_technique(AoTechnique::Off));
     let narrow = gpu.frame(4);
     let wide = gpu.frame_of(wide, &wide_readback, 0);
     let off = gpu.frame_of(off, &off_readback, 0);
@@ -49,7 +47,7 @@ fn debug_view_shows_the_ao_buffer() {
         &scenes::ball_near_wall(),
         DynamicAo {
             debug_view: true,
-            ..default()
+            ..plain_ao()
         },
     );
     let frame = gpu.frame(4);
@@ -80,7 +78,7 @@ fn first_frames_are_valid_while_pipelines_compile() {
         AoTechnique::Horizon,
         AoTechnique::RayMarch,
     ] {
-        let ao = DynamicAo::default().with_technique(technique);
+        let ao = plain_ao().with_technique(technique);
         let mut gpu = Gpu::with_background_compilation(&scenes::cube_on_plane(), ao);
         let mut took_over = false;
         for _ in 0..40 {

@@ -15,6 +15,7 @@ use bevy_dynamic_ao::reference::{
 use bevy_dynamic_ao::spheres::OccluderSphere;
 
 use crate::far_terms::{self, FarTerm};
+use crate::harness::plain_ao;
 use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
 use crate::{models, scenes};
 
@@ -169,12 +170,15 @@ pub struct FarRun {
     pub bounds: (Vec3, Vec3),
     /// The voxel volume for the radius it was placed for.
     volume: Option<(Entity, f32)>,
+    /// The image-space settings `render` uses where it asks for the near field (technique,
+    /// budgets, resolution, accumulation): the near field by default.
+    pub image_space: DynamicAo,
 }
 
 impl FarRun {
     /// Builds the app (loading models from `folder`, or the crate's `assets/`).
     pub fn new(scene: &FarScene, folder: Option<&str>) -> Self {
-        let mut gpu = Gpu::with_asset_folder(&scene.spec, DynamicAo::default(), folder);
+        let mut gpu = Gpu::with_asset_folder(&scene.spec, plain_ao(), folder);
         if let Some(model) = scene.model {
             let root = models::load_model(&mut gpu, model.file, model.animation, model.time);
             let (lo, hi) = models::stand_on_floor(&mut gpu, root, model.height, model.at);
@@ -204,6 +208,7 @@ impl FarRun {
             meshes,
             bounds,
             volume: None,
+            image_space: plain_ao(),
         };
         run.settle();
         run
@@ -255,7 +260,8 @@ impl FarRun {
         self.volume = Some((volume, radius));
     }
 
-    /// Renders the near field (or no image-space term) with `far` joined by `blend`, every
+    /// Renders the near field, or the image-space settings of `image_space` (or no image-space
+    /// term), with `far` joined by `blend`, every
     /// term counting within `radius`.
     pub fn render(
         &mut self,
@@ -267,18 +273,29 @@ impl FarRun {
         if far == Some(FarTerm::Voxels) {
             self.place_volume(radius);
         }
+        let image_space = self.image_space.clone();
         self.gpu.set_ao(|ao| {
             ao.technique = if near {
-                AoTechnique::NearField
+                image_space.technique
             } else {
                 AoTechnique::Off
             };
+            ao.near_field = image_space.near_field;
+            ao.horizon = image_space.horizon;
+            ao.ray_march = image_space.ray_march;
+            ao.half_resolution = image_space.half_resolution;
+            ao.temporal = image_space.temporal;
             ao.radius = radius;
             ao.far_field_blend = blend;
             FarTerm::select(far, ao);
         });
         self.settle();
-        self.gpu.frame(4)
+        // Accumulated occlusion is read once converged.
+        self.gpu.frame(if near && image_space.temporal.enabled {
+            30
+        } else {
+            4
+        })
     }
 
     /// The scene's triangles as they are drawn now.

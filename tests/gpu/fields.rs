@@ -13,6 +13,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
+use crate::harness::plain_ao;
 use crate::harness::{GPU_TURN, Gpu, difference_stats};
 use crate::scenes;
 
@@ -57,7 +58,7 @@ fn aofield_files_load_or_fail_with_a_clear_error() {
     }
     let mut gpu = Gpu::with_asset_folder(
         &scenes::cube_on_plane(),
-        DynamicAo::default(),
+        plain_ao(),
         Some(dir.to_str().unwrap()),
     );
     let handles: Vec<Handle<AoFieldData>> = files
@@ -179,7 +180,7 @@ fn fields_only(shading: FieldShading) -> DynamicAo {
         technique: AoTechnique::Off,
         spheres: false,
         field_shading: shading,
-        ..default()
+        ..plain_ao()
     }
 }
 

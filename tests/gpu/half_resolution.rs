@@ -8,6 +8,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, pixel_occlusion},
 };
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, HEIGHT, WIDTH, difference_stats};
 use crate::scenes;
 
@@ -15,7 +16,7 @@ use crate::scenes;
 fn half_resolution_matches_the_cpu_and_stays_close_to_full_resolution() {
     let radius = 0.73;
     for (name, scene) in scenes::all() {
-        let full_ao = DynamicAo::default().with_radius(radius);
+        let full_ao = plain_ao().with_radius(radius);
         let half_ao = DynamicAo {
             half_resolution: true,
             ..full_ao.clone()

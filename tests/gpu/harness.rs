@@ -417,3 +417,16 @@ pub fn band(visibility: &[f32], columns: std::ops::Range<u32>) -> f32 {
 pub fn index(x: u32, y: u32) -> usize {
     (y * WIDTH + x) as usize
 }
+
+/// The settings these tests were written for: the near field at full resolution, each frame on
+/// its own (no accumulation), the ray march at its single-frame reference budget. The crate's
+/// default (the accumulated ray march at half resolution) has tests of its own.
+pub fn plain_ao() -> DynamicAo {
+    DynamicAo {
+        technique: AoTechnique::NearField,
+        ray_march: RayMarchParams::REFERENCE,
+        half_resolution: false,
+        temporal: AoTemporal::OFF,
+        ..DynamicAo::default()
+    }
+}

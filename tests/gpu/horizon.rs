@@ -6,6 +6,7 @@ use bevy_dynamic_ao::reference::{
     metrics::{mean_bias, rmse},
 };
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
@@ -30,7 +31,7 @@ fn horizon_matches_the_cpu_evaluation_and_tracks_ground_truth() {
         .into_iter()
         .flat_map(|s| HorizonMode::ALL.map(|m| (s.clone(), m)))
     {
-        let mut ao = DynamicAo::default()
+        let mut ao = plain_ao()
             .with_technique(AoTechnique::Horizon)
             .with_radius(radius)
             .with_blur(AoBlur::OFF);

@@ -3,6 +3,7 @@
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, HEIGHT, WIDTH};
 use crate::scenes;
 
@@ -18,10 +19,7 @@ fn direct_light_is_untouched() {
         Transform::from_xyz(1.0, 3.0, 2.0).looking_at(Vec3::ZERO, Vec3::Y),
         2_000.0,
     ));
-    let mut gpu = Gpu::new(
-        &scene,
-        DynamicAo::default().with_technique(AoTechnique::Off),
-    );
+    let mut gpu = Gpu::new(&scene, plain_ao().with_technique(AoTechnique::Off));
     let off = gpu.color(4);
     gpu.set_ao(|ao| ao.technique = AoTechnique::NearField);
     let frame = gpu.frame(2);
@@ -51,10 +49,7 @@ fn direct_light_is_untouched() {
 fn ambient_light_darkens_in_a_crease() {
     let mut scene = scenes::cube_on_plane();
     scene.ambient = 2_000.0;
-    let mut gpu = Gpu::new(
-        &scene,
-        DynamicAo::default().with_technique(AoTechnique::Off),
-    );
+    let mut gpu = Gpu::new(&scene, plain_ao().with_technique(AoTechnique::Off));
     let off = gpu.color(4);
     gpu.set_ao(|ao| ao.technique = AoTechnique::NearField);
     let frame = gpu.frame(2);

@@ -27,6 +27,7 @@ mod horizon;
 mod lighting;
 mod models;
 mod near_field;
+mod presets;
 mod ray_march;
 mod scenes;
 mod shared_assets;

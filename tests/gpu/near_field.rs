@@ -11,12 +11,13 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
 /// Bevy 0.19's SSAO radius is fixed in its shader (0.5 × 1.457 m, falling off over its outer
 /// 60%); every comparison with it uses the same ground-truth radius.
-const BEVY_SSAO_RADIUS: f32 = 0.73;
+pub const BEVY_SSAO_RADIUS: f32 = 0.73;
 
 fn inputs(ao: &DynamicAo) -> NearFieldInputs {
     let params = ao.near_field.sanitized();
@@ -37,7 +38,7 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
         ("cube on plane, orthographic", scenes::cube_on_plane(), true),
     ] {
         // A wide blur, so the comparison covers the filter as much as the formula.
-        let ao = DynamicAo::default()
+        let ao = plain_ao()
             .with_near_field(AoPreset::Medium.near_field())
             .with_blur(AoBlur {
                 radius: 8,
@@ -96,7 +97,7 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
     let mut rows = Vec::new();
     for (name, scene) in scenes::all() {
         let bvh = scene.bvh();
-        let mut gpu = Gpu::new(&scene, DynamicAo::default().with_radius(BEVY_SSAO_RADIUS));
+        let mut gpu = Gpu::new(&scene, plain_ao().with_radius(BEVY_SSAO_RADIUS));
         let ours = gpu.frame(4);
         let truth = ours.ground_truth(&bvh, BEVY_SSAO_RADIUS);
         let mask = ours.geometry_mask();

@@ -7,6 +7,7 @@ use bevy_dynamic_ao::reference::{
     ray_march::{RayMarchInputs, ray_march_occlusion},
 };
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, difference_stats};
 use crate::scenes;
 
@@ -15,7 +16,7 @@ fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
     let radius = 0.73;
     let scene = scenes::ball_near_wall();
     let with = |directions, elevations| {
-        DynamicAo::default()
+        plain_ao()
             .with_technique(AoTechnique::RayMarch)
             .with_radius(radius)
             .with_blur(AoBlur::OFF)
@@ -66,7 +67,7 @@ fn ray_march_matches_the_cpu_and_converges_with_more_rays() {
 fn ray_march_error_on_every_scene() {
     let radius = 0.73;
     for (name, scene) in scenes::all() {
-        let ao = DynamicAo::default()
+        let ao = plain_ao()
             .with_technique(AoTechnique::RayMarch)
             .with_radius(radius);
         let mut gpu = Gpu::new(&scene, ao);

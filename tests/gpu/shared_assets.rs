@@ -3,8 +3,8 @@
 //! Skipped, with a message, where the folder is absent.
 
 use bevy::prelude::*;
-use bevy_dynamic_ao::prelude::*;
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, SceneSpec};
 use crate::models::{load_model, shared_assets};
 
@@ -16,11 +16,7 @@ fn animated_fox_has_the_same_silhouette_in_both_layers() {
     // The fox model is about 150 units long; frame it from a few lengths away.
     let camera =
         Transform::from_xyz(120.0, 80.0, 160.0).looking_at(Vec3::new(0.0, 30.0, 0.0), Vec3::Y);
-    let mut gpu = Gpu::with_asset_folder(
-        &SceneSpec::new(camera),
-        DynamicAo::default(),
-        folder.to_str(),
-    );
+    let mut gpu = Gpu::with_asset_folder(&SceneSpec::new(camera), plain_ao(), folder.to_str());
     // The run cycle, half a second in.
     load_model(&mut gpu, "Fox/Fox.glb", Some(2), 0.5);
     let frame = gpu.frame(8);

@@ -10,6 +10,7 @@ use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
+use crate::harness::plain_ao;
 use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
 
 pub(crate) const HALF: f32 = 0.15;
@@ -82,7 +83,7 @@ fn camera() -> Transform {
 
 #[test]
 fn back_layer_follows_the_skin() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
     let world = gpu.app.world_mut();
     let bindposes = column_bindposes(world);
     let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
@@ -112,7 +113,7 @@ fn back_layer_follows_the_skin() {
 
 #[test]
 fn back_layer_follows_morph_targets() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
     let mut mesh = column();
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
@@ -195,7 +196,7 @@ fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
 #[test]
 fn occluder_spheres_follow_the_skin() {
     for (shape, count) in [(ProxyShape::Spheres, 8), (ProxyShape::Boxes, 2)] {
-        let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+        let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
         let world = gpu.app.world_mut();
         let bindposes = column_bindposes(world);
         let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
@@ -299,7 +300,7 @@ fn occluder_spheres_follow_the_skin() {
 /// view here; its spheres are still computed, as for any off-screen occluder.
 #[test]
 fn bad_skins_fall_back() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), DynamicAo::default());
+    let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
     let world = gpu.app.world_mut();
     let bindposes = column_bindposes(world);
     let mut unskinned = column();

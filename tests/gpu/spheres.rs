@@ -11,6 +11,7 @@ use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
 
 use bevy::mesh::skinning::SkinnedMesh;
 
+use crate::harness::plain_ao;
 use crate::harness::{Gpu, SceneSpec, difference_stats};
 use crate::skinned::{LENGTH, column, column_bindposes};
 
@@ -21,7 +22,7 @@ fn occluder(count: u32) -> SphereOccluder {
 fn far_field_only() -> DynamicAo {
     DynamicAo {
         technique: AoTechnique::Off,
-        ..default()
+        ..plain_ao()
     }
 }
 
@@ -112,7 +113,7 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
 
         // The far field alone counts every occluder within the camera's radius.
         let camera = ProxyCamera {
-            radius: DynamicAo::default().radius,
+            radius: plain_ao().radius,
             near_radius: 0.0,
             use_back: false,
         };

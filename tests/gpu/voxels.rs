@@ -23,6 +23,7 @@ use bevy_dynamic_ao::reference::{
 };
 use bevy_dynamic_ao::voxels::{VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelMarch};
 
+use crate::harness::plain_ao;
 use crate::harness::{Frame, Gpu, SceneSpec, WIDTH, band, difference_stats};
 use crate::scenes;
 use crate::skinned::{LENGTH, column, column_bindposes};
@@ -33,7 +34,7 @@ fn voxels_only() -> DynamicAo {
         technique: AoTechnique::Off,
         spheres: false,
         fields: false,
-        ..default()
+        ..plain_ao()
     }
 }
 
@@ -412,7 +413,7 @@ fn against_truth(
     other: std::ops::Range<u32>,
     radius: f32,
 ) -> Comparison {
-    let mut gpu = Gpu::new(scene, DynamicAo::default().with_radius(radius));
+    let mut gpu = Gpu::new(scene, plain_ao().with_radius(radius));
     let entity = spawn_volume(&mut gpu, transform, volume);
     gpu.set_ao(|ao| ao.voxels = false);
     let near = gpu.frame(3);
