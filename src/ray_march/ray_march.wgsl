@@ -3,8 +3,8 @@
 
 #import bevy_dynamic_ao::image_space_bindings::{
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
-    view_position,
 }
+#import bevy_dynamic_ao::nd_buffer::pixel_world_size
 #import bevy_dynamic_ao::sampling::{pixel_pattern, frame_jitter}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
 
@@ -31,9 +31,12 @@ fn view_z(rows: DepthRows, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> f32
 }
 
 // Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
-// geometry the two layers bound.
+// geometry the two layers bound, or behind a sheet thinner than a step (`step`, metres) that the
+// previous step, at depth `previous_z`, lay in front of.
 fn blocked(
     z: f32,
+    previous_z: f32,
+    step: f32,
     clip: vec4<f32>,
     rows: DepthRows,
     size: vec2<f32>,
@@ -60,7 +63,14 @@ fn blocked(
     }
     let back = textureLoad(back_depth, q, 0);
     if back > 0.0 {
-        return select(0, 1, z > view_z(rows, q, size, back));
+        let back_z = view_z(rows, q, size, back);
+        if z > back_z {
+            return 1;
+        }
+        // A wall of one polygon has its back face where its front is: no step lands between
+        // them, so a ray through it shows only as a step in front and the next one behind.
+        let crossed = front_z - back_z < step && previous_z > front_z - 0.01 * radius;
+        return select(0, 1, crossed);
     }
     return select(0, 1, front_z - z < radius);
 }
@@ -91,10 +101,10 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // Rays start one pixel's width above the surface. A surface seen at a grazing angle (a floor
     // far off) changes depth within a pixel by as much as a point half a pixel's width above it
     // is nearer, so a step lower than that reads as behind the pixel centre's depth.
-    let footprint = 2.0 * (view.clip_from_view * vec4<f32>(p, 1.0)).w
-        / (size.x * view.clip_from_view[0][0]);
+    let footprint = pixel_world_size(view, -p.z, size.y);
     let origin = p + n * footprint;
     let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
+    let step = radius / f32(settings.ray_march_steps);
     let directions = settings.ray_march_directions;
     let elevations = settings.ray_march_elevations;
     var hits = 0u;
@@ -111,7 +121,8 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
             for (var s = 0u; s < settings.ray_march_steps; s++) {
                 let t = (f32(s) + step_offset) / f32(settings.ray_march_steps) * radius;
                 let z = origin.z + dir.z * t;
-                let state = blocked(z, clip + clip_dir * t, rows, size, dims, radius);
+                let previous_z = origin.z + dir.z * max(t - step, 0.0);
+                let state = blocked(z, previous_z, step, clip + clip_dir * t, rows, size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);
                     break;

@@ -24,8 +24,16 @@ fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, dep
     view.view_position(pixel.x, pixel.y, width, height, depth)
 }
 
-/// 1 blocked, 0 free, −1 left the screen.
-fn blocked(nd: &NdBuffer, view: &ViewMatrices, x: Vec3, radius: f32) -> i32 {
+/// 1 blocked (inside the solid the layers bound, or behind a sheet thinner than `step` that the
+/// previous step, at depth `previous_z`, lay in front of), 0 free, −1 left the screen.
+fn blocked(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    x: Vec3,
+    previous_z: f32,
+    step: f32,
+    radius: f32,
+) -> i32 {
     let (w, h) = (nd.width, nd.height);
     let clip = view.clip_from_view * x.extend(1.0);
     if clip.w <= 0.0 {
@@ -47,7 +55,12 @@ fn blocked(nd: &NdBuffer, view: &ViewMatrices, x: Vec3, radius: f32) -> i32 {
         return 0;
     }
     if back.depth > 0.0 {
-        return i32::from(x.z > view_position(view, q, w, h, back.depth).z);
+        let back_z = view_position(view, q, w, h, back.depth).z;
+        if x.z > back_z {
+            return 1;
+        }
+        let crossed = front_z - back_z < step && previous_z > front_z - 0.01 * radius;
+        return i32::from(crossed);
     }
     i32::from(front_z - x.z < radius)
 }
@@ -92,9 +105,9 @@ pub fn pixel_occlusion(
     let frame = tangent_frame(n);
     let (t1, t2) = (frame.x_axis, frame.y_axis);
     // One pixel's width above the surface, as the shader starts its rays.
-    let footprint = 2.0 * (view.clip_from_view * p.extend(1.0)).w
-        / (nd.width as f32 * view.clip_from_view.x_axis.x);
+    let footprint = view.pixel_world_size(-p.z, nd.height);
     let origin = p + n * footprint;
+    let step = inputs.radius / inputs.steps as f32;
     let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x2c1b_3c6d));
     let rotation = hash as f32 * HASH_TO_UNIT;
     let jitter = pcg_hash(hash) as f32 * HASH_TO_UNIT;
@@ -107,7 +120,8 @@ pub fn pixel_occlusion(
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
             for s in 0..inputs.steps {
                 let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
-                let state = blocked(nd, view, origin + dir * t, inputs.radius);
+                let previous_z = origin.z + dir.z * (t - step).max(0.0);
+                let state = blocked(nd, view, origin + dir * t, previous_z, step, inputs.radius);
                 if state != 0 {
                     hits += u32::from(state == 1);
                     break;

@@ -5,8 +5,7 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::metrics::rmse;
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, SceneSpec};
+use crate::harness::{Gpu, SceneSpec, plain_ao};
 
 #[test]
 fn back_faces_occlude_the_floor_next_to_a_box() {

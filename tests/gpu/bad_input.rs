@@ -7,8 +7,7 @@ use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, SceneSpec};
+use crate::harness::{Gpu, SceneSpec, plain_ao};
 use crate::scenes;
 
 fn mean_luminance(image: &[Vec3]) -> f32 {

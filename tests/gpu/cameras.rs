@@ -2,8 +2,7 @@
 
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::Gpu;
-use crate::harness::plain_ao;
+use crate::harness::{Gpu, plain_ao};
 use crate::scenes;
 
 #[test]

@@ -15,8 +15,7 @@ use bevy_dynamic_ao::reference::{
 use bevy_dynamic_ao::spheres::OccluderSphere;
 
 use crate::far_terms::{self, FarTerm};
-use crate::harness::plain_ao;
-use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, plain_ao};
 use crate::{models, scenes};
 
 /// A model file to stand on the floor: file (relative to the asset folder), animation, time

@@ -13,8 +13,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
-use crate::harness::plain_ao;
-use crate::harness::{GPU_TURN, Gpu, difference_stats};
+use crate::harness::{GPU_TURN, Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
 fn small_field() -> AoFieldData {

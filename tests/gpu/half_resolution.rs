@@ -8,8 +8,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, pixel_occlusion},
 };
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, HEIGHT, WIDTH, difference_stats};
+use crate::harness::{Gpu, HEIGHT, WIDTH, difference_stats, plain_ao};
 use crate::scenes;
 
 #[test]

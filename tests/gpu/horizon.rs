@@ -6,8 +6,7 @@ use bevy_dynamic_ao::reference::{
     metrics::{mean_bias, rmse},
 };
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, difference_stats};
+use crate::harness::{Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
 fn inputs(ao: &DynamicAo) -> HorizonInputs {

@@ -3,8 +3,7 @@
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, HEIGHT, WIDTH};
+use crate::harness::{Gpu, HEIGHT, WIDTH, plain_ao};
 use crate::scenes;
 
 fn luminance(c: Vec3) -> f32 {

@@ -11,8 +11,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, difference_stats};
+use crate::harness::{Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
 /// Bevy 0.19's SSAO radius is fixed in its shader (0.5 × 1.457 m, falling off over its outer

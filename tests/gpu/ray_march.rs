@@ -7,8 +7,7 @@ use bevy_dynamic_ao::reference::{
     ray_march::{RayMarchInputs, ray_march_occlusion},
 };
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, difference_stats};
+use crate::harness::{Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
 #[test]

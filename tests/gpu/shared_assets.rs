@@ -4,8 +4,7 @@
 
 use bevy::prelude::*;
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, SceneSpec};
+use crate::harness::{Gpu, SceneSpec, plain_ao};
 use crate::models::{load_model, shared_assets};
 
 #[test]

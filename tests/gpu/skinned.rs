@@ -10,8 +10,7 @@ use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::plain_ao;
-use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, plain_ao};
 
 pub(crate) const HALF: f32 = 0.15;
 pub(crate) const LENGTH: f32 = 1.2;

@@ -11,8 +11,7 @@ use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
 
 use bevy::mesh::skinning::SkinnedMesh;
 
-use crate::harness::plain_ao;
-use crate::harness::{Gpu, SceneSpec, difference_stats};
+use crate::harness::{Gpu, SceneSpec, difference_stats, plain_ao};
 use crate::skinned::{LENGTH, column, column_bindposes};
 
 fn occluder(count: u32) -> SphereOccluder {

@@ -8,8 +8,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
-use crate::harness::plain_ao;
-use crate::harness::{Frame, Gpu, difference_stats};
+use crate::harness::{Frame, Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
 /// The near field with few samples and no blur: the noise accumulation has to remove.

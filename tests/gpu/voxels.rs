@@ -23,8 +23,7 @@ use bevy_dynamic_ao::reference::{
 };
 use bevy_dynamic_ao::voxels::{VoxelFalloff, VoxelGridInfo, VoxelGridReadback, VoxelMarch};
 
-use crate::harness::plain_ao;
-use crate::harness::{Frame, Gpu, SceneSpec, WIDTH, band, difference_stats};
+use crate::harness::{Frame, Gpu, SceneSpec, WIDTH, band, difference_stats, plain_ao};
 use crate::scenes;
 use crate::skinned::{LENGTH, column, column_bindposes};
 
