@@ -9,8 +9,9 @@
 //! `AO fields, N occluders` rows draw N toaster-sized boxes with an `AoField` each (one baked
 //! 32³ field shared by all). The `voxels` rows put one `VoxelAoVolume` around the room (plus
 //! extra balls for the triangle-count rows) with the image-space term off: `voxelize` is the
-//! per-frame grid build, `voxel AO` the sampling of the half-resolution map, `voxel filter` its
-//! upsampling and blur. On lavapipe the voxelize dispatch's timestamps do not capture its work
+//! per-frame grid build, `voxel AO` the sampling of the half-resolution map, `voxel temporal` its
+//! accumulation over frames (where the camera accumulates), `voxel filter` its upsampling and
+//! blur. On lavapipe the voxelize dispatch's timestamps do not capture its work
 //! (a run that skips the dispatch is faster by the whole difference while the span reads the
 //! same), so there the `frame` column against the `voxels 8³` row is the measure of it.
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
@@ -200,6 +201,7 @@ fn main() {
         ("dynamic_ao_fields", "fields"),
         ("dynamic_ao_voxelize", "voxelize"),
         ("dynamic_ao_voxel_ao", "voxel AO"),
+        ("dynamic_ao_voxel_temporal", "voxel temporal"),
         ("dynamic_ao_voxel_filter", "voxel filter"),
         ("dynamic_ao_compose", "compose"),
     ];

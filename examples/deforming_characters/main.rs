@@ -11,19 +11,19 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/walking.rs"]
+mod walking;
 
-use bevy::gltf::GltfAssetLabel;
 use bevy::prelude::*;
-use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
+use bevy::world_serialization::WorldAssetRoot;
 use bevy_dynamic_ao::prelude::*;
 use common::{ExampleArgs, HelpLine};
+use walking::{WALKER, WalkAnimation, WalkPath, start_walking, walk};
 
 const USAGE: &str = "usage: deforming_characters [--headless] [--frames N] [--out FILE.png] \
 [--width W] [--height H] [--characters N] [--show-spheres] [--voxels] [--show-voxels] [--debug-view]
 keys: N image-space AO on/off, F far field (spheres) on/off, V voxel volumes on/off, M blend (count once/add/max),
       S show spheres, O show occupied voxels, D debug view, Esc quit";
-
-const WALKER: &str = "characters/walker.glb";
 
 fn main() {
     let args = ExampleArgs::parse(USAGE);
@@ -84,31 +84,10 @@ struct Options {
 /// within reach, metres.
 const WALKER_VOLUME: Vec3 = Vec3::new(0.75, 1.05, 0.75);
 
-/// A walker following a circle: centre, radius (metres), angular speed (radians per second),
-/// starting angle.
-#[derive(Component)]
-struct Path {
-    centre: Vec3,
-    radius: f32,
-    speed: f32,
-    phase: f32,
-}
-
-#[derive(Resource)]
-struct WalkAnimation {
-    graph: Handle<AnimationGraph>,
-    node: AnimationNodeIndex,
-}
-
 fn setup(world: &mut World) {
     let options = *world.resource::<Options>();
     world.resource_mut::<ShowOccluderSpheres>().0 = options.show_spheres;
-    let assets = world.resource::<AssetServer>().clone();
-    let clip = assets.load(GltfAssetLabel::Animation(0).from_asset(WALKER));
-    let scene = assets.load(GltfAssetLabel::Scene(0).from_asset(WALKER));
-    let (graph, node) = AnimationGraph::from_clip(clip);
-    let graph = world.resource_mut::<Assets<AnimationGraph>>().add(graph);
-    world.insert_resource(WalkAnimation { graph, node });
+    let scene = WalkAnimation::load(world);
     world.insert_resource(common::RequiredAsset {
         handle: scene.clone().untyped(),
         path: WALKER,
@@ -155,7 +134,7 @@ fn setup(world: &mut World) {
         // Rings of walkers; neighbours walk in opposite directions so they pass close by.
         let ring = i / 6;
         let slot = i % 6;
-        let path = Path {
+        let path = WalkPath {
             centre: Vec3::new(
                 -2.4 + 1.6 * (slot % 3) as f32,
                 0.0,
@@ -195,41 +174,6 @@ fn setup(world: &mut World) {
         for volume in volumes {
             world.entity_mut(volume).insert(ShowOccupiedVoxels);
         }
-    }
-}
-
-/// Once a walker's scene exists, its animation player starts the walk cycle at its own phase.
-fn start_walking(
-    ready: On<WorldInstanceReady>,
-    mut commands: Commands,
-    animation: Res<WalkAnimation>,
-    children: Query<&Children>,
-    mut players: Query<&mut AnimationPlayer>,
-    paths: Query<&Path>,
-) {
-    let phase = paths.get(ready.entity).map_or(0.0, |p| p.phase);
-    for entity in children.iter_descendants(ready.entity) {
-        if let Ok(mut player) = players.get_mut(entity) {
-            player
-                .play(animation.node)
-                .repeat()
-                .seek_to(phase.rem_euclid(1.0));
-            commands
-                .entity(entity)
-                .insert(AnimationGraphHandle(animation.graph.clone()));
-        }
-    }
-}
-
-fn walk(time: Res<Time>, mut walkers: Query<(&Path, &mut Transform)>) {
-    let t = time.elapsed_secs();
-    for (path, mut transform) in &mut walkers {
-        let angle = path.phase + path.speed * t;
-        let offset = Vec3::new(angle.cos(), 0.0, angle.sin()) * path.radius;
-        transform.translation = path.centre + offset;
-        // Face along the circle (the walker looks down +Z).
-        let heading = Vec3::new(-angle.sin(), 0.0, angle.cos()) * path.speed.signum();
-        transform.rotation = Quat::from_rotation_arc(Vec3::Z, heading);
     }
 }
 

@@ -27,15 +27,19 @@ fn frame_offset(frame: u32) -> vec2<f32> {
     return fract(f32(frame & 1023u) * vec2<f32>(0.75487766624669276, 0.56984029099805327));
 }
 
+// A third offset of frame `frame` in [0, 1), along the golden-ratio sequence; 0 on frame 0.
+fn frame_step(frame: u32) -> f32 {
+    return fract(f32(frame & 1023u) * 0.61803398874989485);
+}
+
 // A third offset in [0, 1) for a pixel whose pattern hashed to `hash`: 0.5 on frame 0 (every
 // frame without accumulation, where the CPU twins expect the middle), else moved every frame
-// along the golden-ratio sequence, so accumulated frames fill the interval.
+// by `frame_step`, so accumulated frames fill the interval.
 fn frame_jitter(hash: u32, frame: u32) -> f32 {
     if frame == 0u {
         return 0.5;
     }
-    return fract(f32(pcg_hash(hash ^ 0x9e3779b9u)) * HASH_TO_UNIT
-        + f32(frame & 1023u) * 0.61803398874989485);
+    return fract(f32(pcg_hash(hash ^ 0x9e3779b9u)) * HASH_TO_UNIT + frame_step(frame));
 }
 
 // A pixel's random pattern: its `hash` (salted per technique), and a rotation and a jitter in

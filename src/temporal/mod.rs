@@ -1,4 +1,5 @@
-//! Temporal accumulation of the image-space occlusion (near field, horizon-based, ray march).
+//! Temporal accumulation of the image-space occlusion (near field, horizon-based, ray march) and of
+//! the voxel term.
 //!
 //! Each frame the image-space technique moves its sample pattern along a low-discrepancy sequence
 //! (`frame_offset` in `shaders/sampling.wgsl`: a frame's rotation and ring or step offsets) and
@@ -23,11 +24,18 @@
 //! The history lives in two textures per view (read one, write the other, swapped every frame),
 //! kept across frames on the render-world view and made again only when the view's size changes.
 //! The blur that follows runs at half its radius.
+//!
+//! The voxel term ([`crate::voxels`]) accumulates the same way, in a history of its own: its rays
+//! turn every frame by the same sequence, and the pass (`PAIR` in `temporal.wgsl`) runs on its
+//! half-resolution map of two channels before the upsampling.
 
 mod node;
 mod pipeline;
 pub mod settings;
 mod view;
+
+pub(crate) use pipeline::{AccumulationTextures, Channels, TemporalPipeline};
+pub(crate) use view::{HistoryFrame, TemporalHistory};
 
 use bevy::app::{App, Plugin, PostUpdate};
 use bevy::asset::embedded_asset;
@@ -82,8 +90,8 @@ fn require_motion_vectors(
     cameras: Query<(Entity, &DynamicAo), Without<MotionVectorPrepass>>,
 ) {
     for (entity, ao) in &cameras {
-        // Only our image-space techniques accumulate: Bevy's SSAO and the far field alone need
-        // no motion vectors.
+        // Our image-space techniques accumulate (and the voxel term, whose plugin asks for motion
+        // vectors itself): Bevy's SSAO, spheres and fields need none.
         if ao.temporal.enabled && ao.technique.is_image_space() {
             commands.entity(entity).insert(MotionVectorPrepass);
         }

@@ -4,15 +4,14 @@
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::render::{
-    extract_component::DynamicUniformIndex,
     render_resource::PipelineCache,
     renderer::{RenderContext, ViewQuery},
     view::ViewUniformOffset,
 };
 
-use super::pipeline::{TemporalBindGroup, TemporalPipeline};
+use super::pipeline::{Channels, TemporalBindGroup, TemporalPipeline};
 use crate::dispatch::{ComputeStep, record_passes};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, PendingPasses};
+use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
 
 pub(crate) fn temporal_pass(
     view: ViewQuery<(
@@ -20,16 +19,15 @@ pub(crate) fn temporal_pass(
         &DynamicAoTextures,
         &TemporalBindGroup,
         &ViewUniformOffset,
-        &DynamicUniformIndex<DynamicAoUniform>,
     )>,
     pipeline: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset, settings_index) = view.into_inner();
+    let (ao_view, textures, bind_group, view_offset) = view.into_inner();
     let (true, Some(compute_pipeline)) = (
         ao_view.temporal,
-        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+        pipeline_cache.get_compute_pipeline(pipeline.one.pipeline),
     ) else {
         return;
     };
@@ -38,7 +36,7 @@ pub(crate) fn temporal_pass(
         label: "dynamic_ao_temporal",
         pipeline: compute_pipeline,
         bind_group: &bind_group.0,
-        offsets: &[view_offset.offset, settings_index.index()],
+        offsets: &[view_offset.offset],
         texels: UVec2::new(size.width, size.height),
     };
     record_passes(&mut ctx, "dynamic_ao_temporal", true, &[step]);
@@ -50,9 +48,7 @@ pub(crate) fn wait_for_temporal(
     pipeline: Res<TemporalPipeline>,
     mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
 ) {
-    let ready = pipeline_cache
-        .get_compute_pipeline(pipeline.pipeline)
-        .is_some();
+    let ready = pipeline.ready(&pipeline_cache, Channels::One);
     for (view, mut pending) in &mut views {
         pending.wait_for(!view.temporal || ready);
     }

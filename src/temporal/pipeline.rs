@@ -1,4 +1,5 @@
-//! The temporal pass's pipeline and each view's bind group.
+//! The temporal pass's pipelines (one channel for the image-space occlusion, two for the voxel
+//! term) and the bind group of one accumulation.
 
 use bevy::asset::load_embedded_asset;
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
@@ -9,56 +10,156 @@ use bevy::render::{
         *,
     },
     renderer::RenderDevice,
-    view::ViewUniform,
+    view::{ViewUniform, ViewUniforms},
 };
 use bevy::utils::default;
 
 use super::view::{TemporalHistory, TemporalUniform};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, OCCLUSION_FORMAT, ViewBindings};
+use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::view::{DynamicAoTextures, OCCLUSION_FORMAT};
 
-/// The accumulation pipeline.
-#[derive(Resource)]
-pub(crate) struct TemporalPipeline {
+/// One accumulation pipeline and its layout.
+pub(crate) struct TemporalVariant {
     layout: BindGroupLayoutDescriptor,
     pub pipeline: CachedComputePipelineId,
 }
 
-impl FromWorld for TemporalPipeline {
-    fn from_world(world: &mut World) -> Self {
-        let float = || texture_2d(TextureSampleType::Float { filterable: false });
-        let layout = BindGroupLayoutDescriptor::new(
-            "dynamic_ao_temporal_layout",
-            &BindGroupLayoutEntries::sequential(
-                ShaderStages::COMPUTE,
-                (
-                    uniform_buffer::<ViewUniform>(true),
-                    uniform_buffer::<DynamicAoUniform>(true),
-                    uniform_buffer::<TemporalUniform>(false),
-                    float(),
-                    texture_depth_2d(),
-                    float(),
-                    float(),
-                    texture_2d(TextureSampleType::Uint),
-                    texture_storage_2d(TextureFormat::Rgba32Uint, StorageTextureAccess::WriteOnly),
-                    texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
-                ),
-            ),
-        );
-        let shader = load_embedded_asset!(world, "temporal.wgsl");
-        let pipeline =
-            world
-                .resource::<PipelineCache>()
-                .queue_compute_pipeline(ComputePipelineDescriptor {
-                    label: Some("dynamic_ao_temporal_pipeline".into()),
-                    layout: vec![layout.clone()],
-                    shader,
-                    entry_point: Some("accumulate".into()),
-                    ..default()
-                });
-        Self { layout, pipeline }
+/// What a history accumulates: one channel or a pair.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Channels {
+    /// The image-space occlusion ([`OCCLUSION_FORMAT`]).
+    One,
+    /// The voxel term's two channels ([`OCCLUSION_PAIR_FORMAT`]).
+    Pair,
+}
+
+/// The accumulation pipelines.
+#[derive(Resource)]
+pub(crate) struct TemporalPipeline {
+    pub one: TemporalVariant,
+    pub pair: TemporalVariant,
+}
+
+impl TemporalPipeline {
+    pub fn variant(&self, channels: Channels) -> &TemporalVariant {
+        match channels {
+            Channels::One => &self.one,
+            Channels::Pair => &self.pair,
+        }
+    }
+
+    /// Whether the pipeline for `channels` has compiled.
+    pub fn ready(&self, cache: &PipelineCache, channels: Channels) -> bool {
+        cache
+            .get_compute_pipeline(self.variant(channels).pipeline)
+            .is_some()
     }
 }
 
+fn variant(world: &mut World, channels: Channels) -> TemporalVariant {
+    let float = || texture_2d(TextureSampleType::Float { filterable: false });
+    let (format, label, shader_defs) = match channels {
+        Channels::One => (OCCLUSION_FORMAT, "dynamic_ao_temporal", vec![]),
+        Channels::Pair => (
+            OCCLUSION_PAIR_FORMAT,
+            "dynamic_ao_temporal_pair",
+            vec!["PAIR".into()],
+        ),
+    };
+    let layout = BindGroupLayoutDescriptor::new(
+        format!("{label}_layout"),
+        &BindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer::<ViewUniform>(true),
+                uniform_buffer::<TemporalUniform>(false),
+                float(),
+                texture_depth_2d(),
+                float(),
+                float(),
+                texture_2d(TextureSampleType::Uint),
+                texture_storage_2d(TextureFormat::Rgba32Uint, StorageTextureAccess::WriteOnly),
+                texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+            ),
+        ),
+    );
+    let shader = load_embedded_asset!(world, "temporal.wgsl");
+    let pipeline =
+        world
+            .resource::<PipelineCache>()
+            .queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(format!("{label}_pipeline").into()),
+                layout: vec![layout.clone()],
+                shader,
+                shader_defs,
+                entry_point: Some("accumulate".into()),
+                ..default()
+            });
+    TemporalVariant { layout, pipeline }
+}
+
+impl FromWorld for TemporalPipeline {
+    fn from_world(world: &mut World) -> Self {
+        Self {
+            one: variant(world, Channels::One),
+            pair: variant(world, Channels::Pair),
+        }
+    }
+}
+
+/// What one accumulation reads and writes besides its history.
+pub(crate) struct AccumulationTextures<'a> {
+    /// This frame's value, as the technique wrote it.
+    pub current: &'a TextureView,
+    /// The accumulated value the next passes read.
+    pub output: &'a TextureView,
+    pub prepass: &'a ViewPrepassTextures,
+}
+
+impl TemporalPipeline {
+    /// The bind group of one accumulation, or `None` while the prepass lacks depth or normals or
+    /// the uniforms are not written yet.
+    pub fn bind_group(
+        &self,
+        device: &RenderDevice,
+        cache: &PipelineCache,
+        view_uniforms: &ViewUniforms,
+        channels: Channels,
+        history: &TemporalHistory,
+        textures: AccumulationTextures,
+    ) -> Option<BindGroup> {
+        let prepass = textures.prepass;
+        let (Some(view), Some(depth), Some(normal), Some(temporal)) = (
+            view_uniforms.uniforms.binding(),
+            prepass.depth_view(),
+            prepass.normal_view(),
+            history.uniform.binding(),
+        ) else {
+            return None;
+        };
+        // Without motion vectors the history is dropped (see `TemporalHistory::advance`), so any
+        // float texture stands in for them.
+        let motion = prepass.motion_vectors_view().unwrap_or(textures.current);
+        let (read, write) = history.views();
+        Some(device.create_bind_group(
+            "dynamic_ao_temporal_bind_group",
+            &cache.get_bind_group_layout(&self.variant(channels).layout),
+            &BindGroupEntries::sequential((
+                view,
+                temporal,
+                textures.current,
+                depth,
+                normal,
+                motion,
+                read,
+                write,
+                textures.output,
+            )),
+        ))
+    }
+}
+
+/// The image-space occlusion's accumulation of a view.
 #[derive(Component)]
 pub(crate) struct TemporalBindGroup(pub(super) BindGroup);
 
@@ -67,7 +168,7 @@ pub(crate) fn prepare_temporal_bind_groups(
     render_device: Res<RenderDevice>,
     pipeline: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
-    bindings: ViewBindings,
+    view_uniforms: Res<ViewUniforms>,
     views: Query<(
         Entity,
         &DynamicAoTextures,
@@ -75,41 +176,26 @@ pub(crate) fn prepare_temporal_bind_groups(
         &TemporalHistory,
     )>,
 ) {
-    let Some((view_binding, settings_binding)) = bindings.get() else {
-        return;
-    };
     for (entity, textures, prepass, history) in &views {
-        let (Some(raw), Some(depth), Some(normal), Some(temporal)) = (
-            textures.raw_occlusion.as_ref(),
-            prepass.depth_view(),
-            prepass.normal_view(),
-            history.uniform.binding(),
-        ) else {
-            commands.entity(entity).remove::<TemporalBindGroup>();
-            continue;
+        let bind_group = textures.raw_occlusion.as_ref().and_then(|raw| {
+            pipeline.bind_group(
+                &render_device,
+                &pipeline_cache,
+                &view_uniforms,
+                Channels::One,
+                history,
+                AccumulationTextures {
+                    current: &raw.default_view,
+                    output: &textures.near_occlusion.default_view,
+                    prepass,
+                },
+            )
+        });
+        match bind_group {
+            Some(bind_group) => commands
+                .entity(entity)
+                .insert(TemporalBindGroup(bind_group)),
+            None => commands.entity(entity).remove::<TemporalBindGroup>(),
         };
-        // Without motion vectors the history is dropped (see `prepare_history`), so any float
-        // texture stands in for them.
-        let motion = prepass.motion_vectors_view().unwrap_or(&raw.default_view);
-        let (read, write) = history.views();
-        let bind_group = render_device.create_bind_group(
-            "dynamic_ao_temporal_bind_group",
-            &pipeline_cache.get_bind_group_layout(&pipeline.layout),
-            &BindGroupEntries::sequential((
-                view_binding.clone(),
-                settings_binding.clone(),
-                temporal,
-                &raw.default_view,
-                depth,
-                normal,
-                motion,
-                read,
-                write,
-                &textures.near_occlusion.default_view,
-            )),
-        );
-        commands
-            .entity(entity)
-            .insert(TemporalBindGroup(bind_group));
     }
 }

@@ -5,7 +5,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// Default most frames a pixel's history averages.
 pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 
-/// Temporal accumulation of the image-space occlusion: the sample pattern moves every frame
+/// Temporal accumulation of the image-space occlusion and the voxel term: the sample pattern (the
+/// voxel rays' too) moves every frame
 /// along a low-discrepancy sequence, and each frame's result is averaged with the pixel's
 /// history, found where the pixel was last frame through Bevy's motion vectors (so moving,
 /// skinned and morphed meshes reproject correctly). A history whose depth or normal does not
@@ -18,10 +19,12 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// noise pattern without motion vectors, and give the technique a budget that suffices in one
 /// frame (as [`AoPreset::Low`](crate::AoPreset::Low) does).
 ///
-/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera, which stays when accumulation is
-/// turned off again (taking it away from a running camera stopped its rendering in our tests).
-/// It does not need Bevy's temporal
-/// anti-aliasing; the two together on one camera have not been tested yet.
+/// Turning it on adds Bevy's `MotionVectorPrepass` to the camera (where an image-space technique
+/// or a voxel volume needs it), which stays when accumulation is turned off again (taking it away
+/// from a running camera stopped its rendering in our tests). It does not need Bevy's temporal
+/// anti-aliasing, and works beside it on the same camera: with Bevy's
+/// `TemporalAntiAliasing` the converged error stays within 0.001 of the error without it
+/// (`cargo test --test gpu accumulation_works_with_bevys`).
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
 pub struct AoTemporal {

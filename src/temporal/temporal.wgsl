@@ -1,11 +1,10 @@
-// Temporal accumulation of the image-space occlusion: this frame's value joins the pixel's
-// history, found where the surface was last frame through Bevy's motion vectors. The history is
+// Temporal accumulation of the image-space occlusion (and, with `PAIR`, of the voxel term's two
+// channels): this frame's value joins the pixel's history, found where the surface was last frame through Bevy's motion vectors. The history is
 // read bilinearly from the four texels around that place, each kept only where its depth and
 // normal match this surface (a disocclusion keeps none), and clamped into the range of this
 // frame's values around the pixel, so a change the motion vectors do not show leaves no trail.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::nd_buffer::decode_normal
 
 struct TemporalUniform {
@@ -13,22 +12,28 @@ struct TemporalUniform {
     reset: u32,
     // Most frames a history averages.
     max_frames: f32,
+    // Full-resolution pixels per texel of the accumulated texture, along each axis (1 or 2).
+    scale: u32,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
-@group(0) @binding(2) var<uniform> temporal: TemporalUniform;
-// This frame's occlusion, as the image-space technique wrote it.
-@group(0) @binding(3) var current: texture_2d<f32>;
-@group(0) @binding(4) var front_depth: texture_depth_2d;
-@group(0) @binding(5) var front_normal: texture_2d<f32>;
+@group(0) @binding(1) var<uniform> temporal: TemporalUniform;
+// This frame's occlusion, as the technique wrote it.
+@group(0) @binding(2) var current: texture_2d<f32>;
+@group(0) @binding(3) var front_depth: texture_depth_2d;
+@group(0) @binding(4) var front_normal: texture_2d<f32>;
 // Bevy's motion vectors: this frame's UV minus last frame's.
-@group(0) @binding(6) var motion_vectors: texture_2d<f32>;
-// Per texel: occlusion, linear depth and frames (as f32 bits) and the normal (4 × 8-bit snorm).
-@group(0) @binding(7) var history_in: texture_2d<u32>;
-@group(0) @binding(8) var history_out: texture_storage_2d<rgba32uint, write>;
+@group(0) @binding(5) var motion_vectors: texture_2d<f32>;
+// Per texel: occlusion (f32 bits, or both channels as 2 × 16-bit unorm with `PAIR`), linear
+// depth and frames (f32 bits) and the normal (4 × 8-bit snorm).
+@group(0) @binding(6) var history_in: texture_2d<u32>;
+@group(0) @binding(7) var history_out: texture_storage_2d<rgba32uint, write>;
 // The accumulated occlusion the filter and compose read.
-@group(0) @binding(9) var occlusion: texture_storage_2d<r32float, write>;
+#ifdef PAIR
+@group(0) @binding(8) var occlusion: texture_storage_2d<rg32float, write>;
+#else
+@group(0) @binding(8) var occlusion: texture_storage_2d<r32float, write>;
+#endif
 
 // A history texel counts where its linear depth is within this share of the surface's...
 const DEPTH_TOLERANCE: f32 = 0.05;
@@ -47,15 +52,40 @@ fn linear_depth(uv: vec2<f32>, depth: f32) -> f32 {
     return -p.z / p.w;
 }
 
-fn store(texel: vec2<i32>, value: f32, depth: f32, frames: f32, normal: vec3<f32>) {
+// The technique's value(s); a single channel keeps 0 in y.
+fn load_value(texel: vec2<i32>) -> vec2<f32> {
+#ifdef PAIR
+    return textureLoad(current, texel, 0).rg;
+#else
+    return vec2<f32>(textureLoad(current, texel, 0).r, 0.0);
+#endif
+}
+
+fn pack_value(value: vec2<f32>) -> u32 {
+#ifdef PAIR
+    return pack2x16unorm(value);
+#else
+    return bitcast<u32>(value.x);
+#endif
+}
+
+fn unpack_value(packed: u32) -> vec2<f32> {
+#ifdef PAIR
+    return unpack2x16unorm(packed);
+#else
+    return vec2<f32>(bitcast<f32>(packed), 0.0);
+#endif
+}
+
+fn store(texel: vec2<i32>, value: vec2<f32>, depth: f32, frames: f32, normal: vec3<f32>) {
     let packed = vec4<u32>(
-        bitcast<u32>(value),
+        pack_value(value),
         bitcast<u32>(depth),
         bitcast<u32>(frames),
         pack4x8snorm(vec4<f32>(normal, 0.0)),
     );
     textureStore(history_out, texel, packed);
-    textureStore(occlusion, texel, vec4<f32>(value));
+    textureStore(occlusion, texel, vec4<f32>(value, 0.0, 0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -66,8 +96,8 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let full = vec2<i32>(textureDimensions(front_depth));
-    let pixel = min(texel * i32(settings.resolution_scale), full - 1);
-    let value = textureLoad(current, texel, 0).r;
+    let pixel = min(texel * i32(temporal.scale), full - 1);
+    let value = load_value(texel);
     let depth = textureLoad(front_depth, pixel, 0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || dot(n, n) == 0.0 {
@@ -83,13 +113,13 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
             let q = clamp(texel + vec2<i32>(dx, dy), vec2<i32>(0), dims - 1);
-            let v = textureLoad(current, q, 0).r;
+            let v = load_value(q);
             lo = min(lo, v);
             hi = max(hi, v);
         }
     }
 
-    var history = 0.0;
+    var history = vec2<f32>(0.0);
     var frames = 0.0;
     var weight = 0.0;
     if temporal.reset == 0u {
@@ -97,7 +127,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         // History texel t holds the surface at full-resolution pixel t × scale, so a place in
         // the last frame maps back through that scale (at half resolution, a texel's centre is
         // not its block's centre: mapping through the block would shift the history every frame).
-        let previous = ((uv - motion) * vec2<f32>(full) - 0.5) / f32(settings.resolution_scale);
+        let previous = ((uv - motion) * vec2<f32>(full) - 0.5) / f32(temporal.scale);
         let base = vec2<i32>(floor(previous));
         let f = previous - floor(previous);
         for (var i = 0u; i < 4u; i++) {
@@ -115,7 +145,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
                 continue;
             }
             let w = mix(1.0 - f.x, f.x, f32(corner.x)) * mix(1.0 - f.y, f.y, f32(corner.y));
-            history += w * bitcast<f32>(h.x);
+            history += w * unpack_value(h.x);
             frames += w * h_frames;
             weight += w;
         }
@@ -125,9 +155,9 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let previous = history / weight;
-    let clamped = clamp(previous, lo - CLAMP_MARGIN, hi + CLAMP_MARGIN);
+    let clamped = clamp(previous, lo - vec2<f32>(CLAMP_MARGIN), hi + vec2<f32>(CLAMP_MARGIN));
     var count = min(frames / weight + 1.0, temporal.max_frames);
-    if clamped != previous {
+    if any(clamped != previous) {
         count = min(count, CLAMPED_FRAMES);
     }
     let result = mix(clamped, value, 1.0 / count);

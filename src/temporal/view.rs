@@ -26,9 +26,10 @@ const HISTORY_FORMAT: TextureFormat = TextureFormat::Rgba32Uint;
 pub(super) struct TemporalUniform {
     pub reset: u32,
     pub max_frames: f32,
+    pub scale: u32,
 }
 
-/// A view's history, kept across frames.
+/// A view's history of one accumulated quantity, kept across frames.
 #[derive(Component)]
 pub(crate) struct TemporalHistory {
     size: UVec2,
@@ -40,10 +41,66 @@ pub(crate) struct TemporalHistory {
     pub(super) uniform: UniformBuffer<TemporalUniform>,
 }
 
+/// What a history is told each frame.
+pub(crate) struct HistoryFrame<'a> {
+    /// Size of the accumulated texture, texels.
+    pub size: UVec2,
+    /// Full-resolution pixels per texel along each axis.
+    pub scale: u32,
+    /// The camera's settings this frame.
+    pub settings: &'a DynamicAo,
+    /// The view's prepass: without motion vectors the history is dropped.
+    pub prepass: Option<&'a ViewPrepassTextures>,
+}
+
 impl TemporalHistory {
     /// The history this frame reads and the one it writes.
     pub(super) fn views(&self) -> (&TextureView, &TextureView) {
         (&self.textures[self.read].1, &self.textures[1 - self.read].1)
+    }
+
+    /// Moves `history` on by a frame: swaps its textures and writes its uniform, dropping what it
+    /// holds when the settings changed, a reset was asked for or motion vectors are missing.
+    /// Returns a new history (which holds nothing yet) where there was none or its size differs.
+    pub fn advance(
+        history: Option<&mut TemporalHistory>,
+        device: &RenderDevice,
+        queue: &RenderQueue,
+        frame: HistoryFrame,
+    ) -> Option<TemporalHistory> {
+        let key = history_key(frame.settings);
+        let motion = frame
+            .prepass
+            .and_then(|p| p.motion_vectors_view())
+            .is_some();
+        let reset = frame.settings.temporal.reset || !motion;
+        let uniform = |reset: bool| TemporalUniform {
+            reset: u32::from(reset),
+            max_frames: frame.settings.temporal.frames() as f32,
+            scale: frame.scale,
+        };
+        match history {
+            Some(history) if history.size == frame.size => {
+                history.read = 1 - history.read;
+                let reset = reset || history.settings != key;
+                history.settings = key;
+                history.uniform.set(uniform(reset));
+                history.uniform.write_buffer(device, queue);
+                None
+            }
+            _ => {
+                let mut history = TemporalHistory {
+                    size: frame.size,
+                    textures: history_textures(device, frame.size),
+                    read: 0,
+                    settings: key,
+                    uniform: UniformBuffer::default(),
+                };
+                history.uniform.set(uniform(true));
+                history.uniform.write_buffer(device, queue);
+                Some(history)
+            }
+        }
     }
 }
 
@@ -72,7 +129,7 @@ fn history_key(settings: &DynamicAo) -> DynamicAo {
     key
 }
 
-/// Makes, swaps or drops each view's history and writes its uniform.
+/// Makes, swaps or drops the image-space occlusion's history of each view.
 pub(crate) fn prepare_history(
     mut commands: Commands,
     device: Res<RenderDevice>,
@@ -98,36 +155,15 @@ pub(crate) fn prepare_history(
             continue;
         };
         let size = textures.near_occlusion.texture.size();
-        let size = UVec2::new(size.width, size.height);
-        let key = history_key(&view.settings);
-        let motion = prepass.and_then(|p| p.motion_vectors_view()).is_some();
-        let mut reset = view.settings.temporal.reset || !motion;
-        let uniform = |reset: bool| TemporalUniform {
-            reset: u32::from(reset),
-            max_frames: view.settings.temporal.frames() as f32,
+        let frame = HistoryFrame {
+            size: UVec2::new(size.width, size.height),
+            scale: if view.half_resolution { 2 } else { 1 },
+            settings: &view.settings,
+            prepass,
         };
-        match history {
-            Some(history) if history.size == size => {
-                let history = history.into_inner();
-                history.read = 1 - history.read;
-                reset |= history.settings != key;
-                history.settings = key;
-                history.uniform.set(uniform(reset));
-                history.uniform.write_buffer(&device, &queue);
-            }
-            _ => {
-                // New textures hold no history yet.
-                let mut history = TemporalHistory {
-                    size,
-                    textures: history_textures(&device, size),
-                    read: 0,
-                    settings: key,
-                    uniform: UniformBuffer::default(),
-                };
-                history.uniform.set(uniform(true));
-                history.uniform.write_buffer(&device, &queue);
-                commands.entity(entity).insert(history);
-            }
+        let history = history.map(Mut::into_inner);
+        if let Some(new) = TemporalHistory::advance(history, &device, &queue, frame) {
+            commands.entity(entity).insert(new);
         }
     }
 }

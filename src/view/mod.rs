@@ -111,6 +111,8 @@ pub(crate) struct DynamicAoView {
     pub half_resolution: bool,
     /// The image-space occlusion is accumulated over frames (see [`crate::AoTemporal`]).
     pub temporal: bool,
+    /// The voxel term is accumulated over frames (see [`crate::AoTemporal`]).
+    pub voxel_temporal: bool,
     /// The far-field terms that take part, by [`FarTerm`].
     far_terms: [bool; FarTerm::COUNT],
 }

@@ -125,7 +125,8 @@ pub(super) fn extract_views(
         };
         // Accumulated over frames, the occlusion needs half the blur.
         let temporal = image_space && ao.temporal.enabled;
-        if temporal {
+        let voxel_temporal = voxels && ao.temporal.enabled;
+        if temporal || voxel_temporal {
             blur.radius = blur.radius.div_ceil(2);
         }
         let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
@@ -136,6 +137,7 @@ pub(super) fn extract_views(
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
                 temporal,
+                voxel_temporal,
                 far_terms,
             },
             FarFieldOutputs::default(),
@@ -166,7 +168,11 @@ pub(super) fn extract_views(
                 radius,
                 near_field_radius: if count_once { near_radius } else { 0.0 },
                 seen_back_layer: u32::from(back_layer),
-                frame_index: if temporal { frame_count.0 } else { 0 },
+                frame_index: if temporal || voxel_temporal {
+                    frame_count.0
+                } else {
+                    0
+                },
                 temporal_frames: if temporal {
                     ao.temporal.frames() as f32
                 } else {

@@ -23,7 +23,10 @@
 //!    where two closed meshes overlap, their common part reads as empty.
 //! 3. **Sample** (GPU, per view, §6): each pixel of a half-resolution AO map traces rays through
 //!    the grids; jitter comes from a hash of the pixel's world position, so it does not crawl
-//!    when the camera moves. Rays start one cell diagonal off the surface, so they never test
+//!    when the camera moves. Under [`AoTemporal`](crate::AoTemporal) the jitter also turns every
+//!    frame and the map is accumulated over frames like the image-space occlusion (see
+//!    [`temporal`](crate::temporal)): with 4 rays per pixel, the RMSE against 64 rays on the CPU
+//!    falls from 0.068 in one frame to 0.010. Rays start one cell diagonal off the surface, so they never test
 //!    the cells the surface itself occupies. Eq. 4 is normalized by the sum of the rays' cosines
 //!    (as printed, a fully enclosed surface would read ½). Departures, to measure what ground
 //!    truth measures:
@@ -107,6 +110,7 @@ impl Plugin for VoxelAoPlugin {
                     mesh_cache::forget_changed_meshes.in_set(DynamicAoUpdate::ForgetChangedMeshes),
                     (systems::forget_removed_volumes, systems::gather_triangles)
                         .in_set(DynamicAoUpdate::Occluders),
+                    systems::require_motion_vectors,
                 ),
             );
     }

@@ -1,5 +1,5 @@
 //! The voxel passes of a view: building the grids (once per frame, by the first view that needs
-//! them), sampling the half-size AO map, upsampling and blurring it.
+//! them), sampling the half-size AO map, accumulating it over frames, upsampling and blurring it.
 
 use bevy::ecs::prelude::*;
 use bevy::render::{
@@ -15,6 +15,7 @@ use super::buffers::VoxelBuffers;
 use super::pipeline::{VoxelBindGroups, VoxelPipelines};
 use crate::dispatch::{ComputeStep, record_passes};
 use crate::filter::BlurPipelines;
+use crate::temporal::{Channels, TemporalPipeline};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, PendingPasses};
 
 /// Most workgroups along one dispatch dimension (WebGPU's guaranteed limit).
@@ -30,6 +31,7 @@ pub(crate) fn voxel_pass(
     mut buffers: ResMut<VoxelBuffers>,
     pipelines: Res<VoxelPipelines>,
     blur: Res<BlurPipelines>,
+    temporal: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
@@ -90,6 +92,20 @@ pub(crate) fn voxel_pass(
     };
     record_passes(&mut ctx, "dynamic_ao_voxel_ao", false, &[sample_step]);
 
+    if let (Some(bind_group), Some(accumulate)) = (
+        &bind_groups.temporal,
+        pipeline_cache.get_compute_pipeline(temporal.pair.pipeline),
+    ) {
+        let step = ComputeStep {
+            label: "dynamic_ao_voxel_temporal",
+            pipeline: accumulate,
+            bind_group,
+            offsets: &offsets[..1],
+            texels: (size + 1) / 2,
+        };
+        record_passes(&mut ctx, "dynamic_ao_voxel_temporal", false, &[step]);
+    }
+
     let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
     if let Some(groups) = &bind_groups.blur {
         passes.push(("dynamic_ao_voxel_blur_x", blur_x, &groups.x));
@@ -113,14 +129,16 @@ pub(crate) fn wait_for_voxels(
     pipeline_cache: Res<PipelineCache>,
     pipelines: Res<VoxelPipelines>,
     blur: Res<BlurPipelines>,
+    temporal: Res<TemporalPipeline>,
     mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
 ) {
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
     let all_ready =
         ready(pipelines.voxelize) && ready(pipelines.sample) && blur.two.ready(&pipeline_cache);
+    let temporal_ready = temporal.ready(&pipeline_cache, Channels::Pair);
     for (view, mut pending) in &mut views {
         if view.has(FarTerm::Voxels) {
-            pending.wait_for(all_ready);
+            pending.wait_for(all_ready && (!view.voxel_temporal || temporal_ready));
         }
     }
 }

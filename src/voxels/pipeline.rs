@@ -12,13 +12,14 @@ use bevy::render::{
         *,
     },
     renderer::RenderDevice,
-    view::ViewUniform,
+    view::{ViewUniform, ViewUniforms},
 };
 use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
-use super::view::VoxelTextures;
+use super::view::{VoxelHistory, VoxelTextures};
 use crate::filter::{BlurBindGroups, BlurPipelines, FilterInputs, OCCLUSION_PAIR_FORMAT};
+use crate::temporal::{AccumulationTextures, Channels, TemporalPipeline};
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm, ViewBindings,
 };
@@ -89,6 +90,8 @@ impl FromWorld for VoxelPipelines {
 #[derive(Component)]
 pub(crate) struct VoxelBindGroups {
     pub sample: BindGroup,
+    /// The temporal accumulation of the half-size map; `None` without it.
+    pub temporal: Option<BindGroup>,
     pub upsample: BindGroup,
     /// X and Y passes; `None` when the blur is off.
     pub blur: Option<BlurBindGroups>,
@@ -107,11 +110,13 @@ pub(crate) fn prepare_voxel_bind_groups(
         Entity,
         &DynamicAoView,
         &DynamicAoTextures,
-        Option<&VoxelTextures>,
+        (Option<&VoxelTextures>, Option<&VoxelHistory>),
         &FarFieldOutputs,
         &ViewPrepassTextures,
     )>,
+    temporal: (Res<TemporalPipeline>, Res<ViewUniforms>),
 ) {
+    let (temporal_pipeline, view_uniforms) = temporal;
     let buffers = buffers.as_mut();
     let (Some(triangles), Some(volumes), Some(params), Some(grid)) = (
         buffers.triangles.buffer(),
@@ -134,7 +139,7 @@ pub(crate) fn prepare_voxel_bind_groups(
     let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
-    for (entity, view, textures, voxel_textures, outputs, prepass) in &views {
+    for (entity, view, textures, (voxel_textures, history), outputs, prepass) in &views {
         let (true, Some(voxel_textures), Some(full), Some(depth), Some(normal)) = (
             view.has(FarTerm::Voxels),
             voxel_textures,
@@ -160,6 +165,23 @@ pub(crate) fn prepare_voxel_bind_groups(
                 &textures.back_depth.default_view,
             )),
         );
+        let temporal =
+            history
+                .zip(voxel_textures.accumulated.as_ref())
+                .and_then(|(history, accumulated)| {
+                    temporal_pipeline.bind_group(
+                        &render_device,
+                        &pipeline_cache,
+                        &view_uniforms,
+                        Channels::Pair,
+                        &history.0,
+                        AccumulationTextures {
+                            current: &voxel_textures.low.default_view,
+                            output: &accumulated.default_view,
+                            prepass,
+                        },
+                    )
+                });
         let inputs = FilterInputs {
             view: view_binding.clone(),
             settings: settings_binding.clone(),
@@ -171,7 +193,7 @@ pub(crate) fn prepare_voxel_bind_groups(
             "dynamic_ao_voxel_upsample_bind_group",
             &inputs,
             normal,
-            [&voxel_textures.low.default_view, &full.default_view],
+            [&voxel_textures.upsampled().default_view, &full.default_view],
         );
         let blur = voxel_textures.scratch.as_ref().map(|scratch| {
             blur.two.blur_bind_groups(
@@ -184,6 +206,7 @@ pub(crate) fn prepare_voxel_bind_groups(
         });
         commands.entity(entity).insert(VoxelBindGroups {
             sample,
+            temporal,
             upsample,
             blur,
         });

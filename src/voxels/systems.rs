@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use bevy::asset::{AssetId, Assets};
 use bevy::camera::visibility::InheritedVisibility;
+use bevy::core_pipeline::prepass::MotionVectorPrepass;
 use bevy::ecs::prelude::*;
 use bevy::ecs::system::SystemParam;
 use bevy::log::warn;
@@ -29,6 +30,7 @@ use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
 use super::mesh_cache::{VoxelMesh, VoxelMeshCache};
 use crate::geometry::deform::{Deformer, Pose, mesh_morph_weights, skin_joints};
 use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
+use crate::settings::{AoTechnique, DynamicAo};
 
 /// What a warning is about; each entity is warned about each problem once.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -369,5 +371,22 @@ fn push_grid_triangles(
             b: [b.x, b.y, b.z, closed_flag],
             c: [c.x, c.y, c.z, 0.0],
         });
+    }
+}
+
+/// Cameras that accumulate the voxel term need Bevy's motion vectors, while any volume exists.
+pub(crate) fn require_motion_vectors(
+    mut commands: Commands,
+    cameras: Query<(Entity, &DynamicAo), Without<MotionVectorPrepass>>,
+    volumes: Query<(), With<VoxelAoVolume>>,
+) {
+    if volumes.is_empty() {
+        return;
+    }
+    for (entity, ao) in &cameras {
+        // Bevy's SSAO takes no far-field term.
+        if ao.temporal.enabled && ao.voxels && ao.technique != AoTechnique::BevySsao {
+            commands.entity(entity).insert(MotionVectorPrepass);
+        }
     }
 }

@@ -1,17 +1,19 @@
 //! The per-view state of voxel volumes: whether any exist and their occlusion buffers (whether
 //! their passes have compiled is counted in `node.rs`).
 
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     Extract,
     camera::ExtractedCamera,
     render_resource::TextureUsages,
-    renderer::RenderDevice,
+    renderer::{RenderDevice, RenderQueue},
     texture::{CachedTexture, TextureCache},
 };
 
 use super::component::VoxelGridInfo;
 use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::temporal::{HistoryFrame, TemporalHistory};
 use crate::view::{
     DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, half_size, view_size, view_texture,
 };
@@ -30,31 +32,53 @@ pub(crate) fn note_voxel_volumes(
 pub(crate) struct VoxelTextures {
     /// Occlusion as sampled, half size.
     pub low: CachedTexture,
+    /// Under temporal accumulation, `low` joined with its history, half size: what the
+    /// upsampling reads.
+    pub accumulated: Option<CachedTexture>,
     /// Between the two passes of the voxel blur; only while the blur is on.
     pub scratch: Option<CachedTexture>,
 }
 
 impl VoxelTextures {
+    /// The half-size map the upsampling reads.
+    pub fn upsampled(&self) -> &CachedTexture {
+        self.accumulated.as_ref().unwrap_or(&self.low)
+    }
+
     /// Whether the upsampled voxel occlusion is blurred on `view`.
     pub fn blurred(view: &DynamicAoView) -> bool {
         view.settings.blur.sanitized().radius > 0
     }
 }
 
+/// The voxel term's temporal history on a view that accumulates it.
+#[derive(Component)]
+pub(crate) struct VoxelHistory(pub TemporalHistory);
+
 pub(crate) fn prepare_voxel_textures(
     mut commands: Commands,
     mut texture_cache: ResMut<TextureCache>,
     render_device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
     mut views: Query<(
         Entity,
         &ExtractedCamera,
         &DynamicAoView,
         &mut FarFieldOutputs,
+        Option<&ViewPrepassTextures>,
+        Option<&mut VoxelHistory>,
     )>,
+    // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
+    stale: Query<Entity, (With<VoxelHistory>, Without<DynamicAoView>)>,
 ) {
-    for (entity, camera, view, mut outputs) in &mut views {
+    for entity in &stale {
+        commands.entity(entity).remove::<VoxelHistory>();
+    }
+    for (entity, camera, view, mut outputs, prepass, history) in &mut views {
         let (true, Some(size)) = (view.has(FarTerm::Voxels), view_size(camera)) else {
-            commands.entity(entity).remove::<VoxelTextures>();
+            commands
+                .entity(entity)
+                .remove::<(VoxelTextures, VoxelHistory)>();
             continue;
         };
         let mut texture = |label, size| {
@@ -71,8 +95,27 @@ pub(crate) fn prepare_voxel_textures(
         outputs.set(FarTerm::Voxels, texture("dynamic_ao_voxel_occlusion", size));
         let scratch =
             VoxelTextures::blurred(view).then(|| texture("dynamic_ao_voxel_scratch", size));
-        commands
-            .entity(entity)
-            .insert(VoxelTextures { low, scratch });
+        let accumulated = view
+            .voxel_temporal
+            .then(|| texture("dynamic_ao_voxel_accumulated", half_size(size)));
+        if view.voxel_temporal {
+            let frame = HistoryFrame {
+                size: half_size(size),
+                scale: 2,
+                settings: &view.settings,
+                prepass,
+            };
+            let history = history.map(|h| &mut h.into_inner().0);
+            if let Some(new) = TemporalHistory::advance(history, &render_device, &queue, frame) {
+                commands.entity(entity).insert(VoxelHistory(new));
+            }
+        } else if history.is_some() {
+            commands.entity(entity).remove::<VoxelHistory>();
+        }
+        commands.entity(entity).insert(VoxelTextures {
+            low,
+            accumulated,
+            scratch,
+        });
     }
 }

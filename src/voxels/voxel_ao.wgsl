@@ -1,7 +1,8 @@
 // Ambient occlusion sampled in the voxel grids (Reinbothe, Boubekeur & Alexa 2009, §6, eq. 2
 // and 4), one value per pixel of a half-resolution AO map. Each pixel traces `rays` rays over its
 // hemisphere (a cone of `spread`), jittered by a hash of its world-space position so the pattern
-// sticks to surfaces when the camera moves. A ray is blocked by the first occupied cell closer
+// sticks to surfaces when the camera moves (and turned every frame under temporal accumulation,
+// whose pass follows this one). A ray is blocked by the first occupied cell closer
 // than the reach (the camera's radius R unless the volume sets d_max): by default found by
 // walking every cell the ray crosses, or, as the paper does, by `steps` evenly spaced tests. A
 // blocked ray counts with the cosine to the normal, fully (what ground truth measures) or with
@@ -14,7 +15,7 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
-#import bevy_dynamic_ao::sampling::pcg_hash
+#import bevy_dynamic_ao::sampling::{frame_offset, frame_step, pcg_hash}
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::math::{tangent_frame, wendland}
 #import bevy_dynamic_ao::voxel_grid::{
@@ -120,10 +121,12 @@ fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> vec2<f32
     if any(g < -margin) || any(g > size + margin) {
         return vec2<f32>(0.0);
     }
+    // Under temporal accumulation the jitter moves every frame (frame 0, without, keeps it).
     let h = cell_hash(p, volume.noise_cell);
-    let j1 = unit_float(pcg_hash(h));
-    let j2 = unit_float(pcg_hash(h + 1u));
-    let j3 = unit_float(pcg_hash(h + 2u));
+    let shift = frame_offset(settings.frame_index);
+    let j1 = fract(unit_float(pcg_hash(h)) + shift.x);
+    let j2 = fract(unit_float(pcg_hash(h + 1u)) + shift.y);
+    let j3 = fract(unit_float(pcg_hash(h + 2u)) + frame_step(settings.frame_index));
     let frame = tangent_frame(n);
     let origin = p + n * volume.bias;
     var occlusion = vec2<f32>(0.0);
