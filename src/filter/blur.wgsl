@@ -41,7 +41,12 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         return;
     }
     let z0 = linear_depth(center_depth);
+#ifdef TWO_CHANNELS
+    // The voxel term's (see `DynamicAoUniform::voxel_blur_radius`).
+    let radius = i32(settings.voxel_blur_radius);
+#else
     let radius = i32(settings.blur_radius);
+#endif
     let sigma = (f32(radius) + 1.0) * 0.5;
     let falloff = 1.0 / (2.0 * sigma * sigma);
     var sum = vec2<f32>(0.0);

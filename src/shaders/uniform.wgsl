@@ -50,4 +50,6 @@ struct DynamicAoUniform {
     frame_index: u32,
     // Frames the temporal history averages (1 without accumulation).
     temporal_frames: f32,
+    // Blur half-width of the voxel term, pixels (0 = off): not halved under accumulation.
+    voxel_blur_radius: u32,
 }

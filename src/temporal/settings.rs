@@ -11,8 +11,8 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// history, found where the pixel was last frame through Bevy's motion vectors (so moving,
 /// skinned and morphed meshes reproject correctly). A history whose depth or normal does not
 /// match the pixel (a disocclusion) is dropped, and a history outside the range of the pixel's
-/// neighbours this frame is clamped into it (no ghost trails). With it on, the blur's radius is
-/// halved.
+/// neighbours this frame is clamped into it (no ghost trails). With it on, the image-space
+/// blur's radius is halved (the voxel term's is not).
 ///
 /// On by default: the default technique traces 2 rays per pixel and frame and relies on it to
 /// reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
