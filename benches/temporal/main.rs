@@ -2,7 +2,8 @@
 //! all in the same run. Prints Markdown tables.
 //!
 //! `cargo bench --profile dev --bench temporal` (`-- --frames N`: consecutive frames of the
-//! still-camera table, default 16; `-- --only still` or `-- --only motion` for one table).
+//! still-camera table, default 16; `-- --only still` or `-- --only motion` for one table;
+//! `-- --config TEXT` for the configurations whose name holds TEXT).
 //!
 //! - **Still camera** (`still.rs`): a floor, a box and a ball. Flicker: mean |AO_t − AO_{t−1}|
 //!   over the pixels that show geometry, once every configuration has converged, and the same for
@@ -89,7 +90,10 @@ fn main() {
         .unwrap_or(16u32)
         .max(2);
     let only = value("--only");
-    let configurations = configurations();
+    let mut configurations = configurations();
+    if let Some(text) = value("--config") {
+        configurations.retain(|c| c.name.contains(text.as_str()));
+    }
     if only.as_deref() != Some("motion") {
         still::run(&configurations, frames);
     }

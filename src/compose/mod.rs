@@ -12,6 +12,7 @@
 //! The debug view draws the same visibility over the lit image, full screen.
 
 mod debug_view;
+mod failed;
 mod node;
 mod pipeline;
 
@@ -51,6 +52,7 @@ impl Plugin for ComposePlugin {
                 (
                     debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
                     hand_over_from_bevy_ssao.in_set(DynamicAoPrepare::HandOver),
+                    failed::report_failed_pipelines.in_set(DynamicAoPrepare::HandOver),
                     (
                         pipeline::prepare_compose_bind_groups,
                         debug_view::prepare_debug_view_bind_groups,
@@ -82,7 +84,12 @@ pub(crate) fn hand_over_from_bevy_ssao(
     pipeline_cache: Res<PipelineCache>,
     compose: Res<pipeline::ComposePipeline>,
     views: Query<(Entity, &PendingPasses, Has<SsaoPipelineId>)>,
+    // Views that stopped running the plugin.
+    stale: Query<Entity, (With<AoPassesReady>, Without<PendingPasses>)>,
 ) {
+    for entity in &stale {
+        commands.entity(entity).remove::<AoPassesReady>();
+    }
     let compose_ready = pipeline_cache
         .get_compute_pipeline(compose.pipeline)
         .is_some();

@@ -1,10 +1,13 @@
 //! Every field asset in use in one storage buffer and one instance per occluder, extracted and
 //! uploaded every frame.
 
-use bevy::asset::{AssetId, Assets};
+use bevy::asset::{AssetEvent, AssetId, Assets};
 use bevy::camera::visibility::InheritedVisibility;
+use bevy::ecs::message::MessageReader;
 use bevy::ecs::prelude::*;
+use bevy::log::warn;
 use bevy::math::{Affine3A, Mat4, Vec3, Vec4};
+use bevy::platform::collections::HashSet;
 use bevy::prelude::GlobalTransform;
 use bevy::render::{
     Extract,
@@ -66,6 +69,15 @@ impl FieldInstance {
     }
 }
 
+/// Bytes one cell takes on the GPU: three `vec4<f32>`.
+const CELL_BYTES: usize = 3 * 16;
+
+/// Most bytes every field in use may take together: the device's storage binding limit, and at
+/// most 512 MiB (a 256³ field alone takes 805 MB).
+fn field_budget(max_storage_binding: u64) -> u64 {
+    max_storage_binding.min(512 << 20)
+}
+
 /// Every field in use and every occluder this frame.
 #[derive(Resource)]
 pub(crate) struct FieldBuffers {
@@ -106,16 +118,49 @@ pub(crate) fn extract_fields(
         )>,
     >,
     fields: Extract<Res<Assets<AoFieldData>>>,
+    mut events: Extract<MessageReader<AssetEvent<AoFieldData>>>,
+    device: Res<RenderDevice>,
+    mut over_budget: Local<HashSet<AssetId<AoFieldData>>>,
 ) {
     let buffers = buffers.as_mut();
+    // A field changed in place (a `.aofield` file reloaded) keeps its id: its cells are uploaded
+    // again, or the grid would be read with the new resolution over the old cells.
+    let changed = events.read().any(|event| match event {
+        AssetEvent::Modified { id } | AssetEvent::LoadedWithDependencies { id } => {
+            buffers.layout.iter().any(|(l, _)| l == id)
+        }
+        _ => false,
+    });
+    let budget = field_budget(device.limits().max_storage_buffer_binding_size);
     let mut used: Vec<AssetId<AoFieldData>> = Vec::new();
+    let mut bytes = 0u64;
     for (field, _, visibility) in &occluders {
         let id = field.field.id();
-        if visibility.is_none_or(|v| v.get()) && fields.contains(id) && !used.contains(&id) {
-            used.push(id);
+        if !visibility.is_none_or(|v| v.get()) || used.contains(&id) {
+            continue;
         }
+        let Some(data) = fields.get(id) else {
+            continue;
+        };
+        let size = (data.cell_count() * CELL_BYTES) as u64;
+        if bytes + size > budget {
+            if over_budget.insert(id) {
+                warn!(
+                    "AoField: a field of {} cells ({size} bytes) does not fit: the fields in use \
+                     may take {budget} bytes together (the device's \
+                     max_storage_buffer_binding_size is {}); its occluders cast nothing. Bake it \
+                     at a lower resolution",
+                    data.cell_count(),
+                    device.limits().max_storage_buffer_binding_size
+                );
+            }
+            continue;
+        }
+        bytes += size;
+        used.push(id);
     }
-    if used.len() != buffers.layout.len()
+    if changed
+        || used.len() != buffers.layout.len()
         || used
             .iter()
             .any(|id| !buffers.layout.iter().any(|(l, _)| l == id))

@@ -7,6 +7,7 @@ use bevy::ecs::prelude::*;
 use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 use super::baker::BakeSettings;
+pub use super::cache::default_folder as default_cache_folder;
 use super::format::AoFieldData;
 
 /// Makes a rigid object cast ambient occlusion from a precomputed field (Malmer et al. 2005):
@@ -41,8 +42,15 @@ impl Default for AoField {
 }
 
 /// Where fields baked on load are kept between runs: one `<hash>.aofield` file per mesh content
-/// and bake settings. Default: `bevy_dynamic_ao/fields` in the system's temporary folder; set
-/// `folder` to `None` to bake every run without touching the disk.
+/// and bake settings. Default: `bevy_dynamic_ao/fields` in the user's cache directory
+/// ([`default_cache_folder`]: `$XDG_CACHE_HOME` or `~/.cache` on Linux, `~/Library/Caches` on
+/// macOS, `%LOCALAPPDATA%` on Windows), never a folder other users share; set `folder` to `None`
+/// to bake every run without touching the disk.
+///
+/// Files are written atomically and never through a symlink, the folder is made readable by the
+/// user alone, and a cached file is used only if it is a regular file of the size the bake would
+/// write, its checksum holds and its grid is the one this mesh and these settings bake; anything
+/// else is baked again and replaced, with a warning.
 #[derive(Resource, Clone, Debug)]
 pub struct AoFieldCache {
     /// The cache folder, created when first written.
@@ -52,7 +60,7 @@ pub struct AoFieldCache {
 impl Default for AoFieldCache {
     fn default() -> Self {
         Self {
-            folder: Some(std::env::temp_dir().join("bevy_dynamic_ao").join("fields")),
+            folder: default_cache_folder(),
         }
     }
 }

@@ -128,6 +128,12 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 impl AoFieldData {
+    /// Bytes of the `.aofield` file of a field with `resolution` cells per axis.
+    pub fn file_size(resolution: UVec3) -> usize {
+        let cells = resolution.x as usize * resolution.y as usize * resolution.z as usize;
+        HEADER_BYTES + cells * CELL_FLOATS * 4 + CHECKSUM_BYTES
+    }
+
     /// Number of cells the resolution calls for.
     pub fn cell_count(&self) -> usize {
         (self.resolution.x * self.resolution.y * self.resolution.z) as usize

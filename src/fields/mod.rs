@@ -46,6 +46,7 @@
 
 pub mod baker;
 mod buffers;
+mod cache;
 mod component;
 pub mod format;
 mod loader;
@@ -62,7 +63,7 @@ use bevy::ecs::prelude::*;
 use bevy::render::{ExtractSchedule, GpuResourceAppExt, Render, RenderSystems};
 
 pub use baker::{BakeError, BakeSettings, FieldReach, bake, grid_box, grid_resolution};
-pub use component::{AoField, AoFieldCache};
+pub use component::{AoField, AoFieldCache, default_cache_folder};
 pub use format::{AoFieldData, AoFieldError};
 pub use loader::AoFieldLoader;
 pub use systems::{ActiveAoField, PendingAoField};
@@ -87,6 +88,7 @@ impl Plugin for AoFieldPlugin {
             .register_type::<AoField>()
             .init_resource::<AoFieldCache>()
             .init_resource::<systems::BakedFields>()
+            .add_observer(systems::remove_active_field)
             .add_systems(
                 PostUpdate,
                 systems::resolve_fields.in_set(DynamicAoUpdate::Occluders),

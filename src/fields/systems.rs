@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use bevy::asset::{AssetId, Assets, Handle};
+use bevy::asset::{AssetEvent, AssetId, Assets, Handle};
 use bevy::ecs::prelude::*;
 use bevy::log::{info, warn};
 use bevy::math::{Affine3A, Vec3};
@@ -14,7 +14,8 @@ use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::{GlobalTransform, Name};
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
-use super::baker::{BakeSettings, FieldReach, bake};
+use super::baker::{BakeGrid, BakeSettings, FieldReach, bake};
+use super::cache::{self, CacheMiss};
 use super::component::{AoField, AoFieldCache};
 use super::format::AoFieldData;
 use crate::geometry::deform::{Deformer, Pose};
@@ -41,6 +42,24 @@ pub struct ActiveAoField {
 /// capture one frame wait until no occluder carries it.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PendingAoField;
+
+/// Each warning an occluder can get, said once per occluder and kind (one set per kind, so that
+/// one warning never hides another).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(crate) enum FieldWarning {
+    NoMesh,
+    MeshNotReadable,
+    Failed,
+    Degenerate,
+    Posed,
+}
+
+/// Taking `AoField` away takes its field away: the occluder stops casting on the next frame.
+pub(crate) fn remove_active_field(remove: On<Remove, AoField>, mut commands: Commands) {
+    if let Ok(mut occluder) = commands.get_entity(remove.entity) {
+        occluder.try_remove::<(ActiveAoField, PendingAoField)>();
+    }
+}
 
 /// A bake: the mesh, for a posed (skinned or morphed) mesh the entity whose pose it is, the
 /// settings and the scale (in [`scale_steps`]).
@@ -103,28 +122,25 @@ fn bake_or_load(
             content_hash(&triangles, &settings)
         ))
     });
-    if let Some(path) = &path
-        && let Ok(bytes) = std::fs::read(path)
-    {
-        match AoFieldData::from_bytes(&bytes) {
+    let grid = BakeGrid::plan(&triangles, &settings);
+    if let (Some(path), Some(grid)) = (&path, &grid) {
+        match cache::read(path, grid) {
             Ok(field) => return Ok(field),
-            // A bad cache file is baked again and replaced.
-            Err(error) => warn!("AoField: ignoring cached {}: {error}", path.display()),
+            Err(CacheMiss::Absent) => {}
+            // A file that is not to be trusted is baked again and replaced.
+            Err(CacheMiss::Rejected(why)) => {
+                warn!("AoField: ignoring cached {}: {why}", path.display());
+            }
         }
     }
     let field = bake(triangles, &settings, &|_, _| {}).map_err(|e| e.to_string())?;
     if let Some(path) = &path {
-        let written = path
-            .parent()
-            .map_or(Ok(()), std::fs::create_dir_all)
-            .and_then(|_| std::fs::write(path, field.to_bytes()));
-        if let Err(error) = written {
-            warn!(
+        match cache::write(path, &field) {
+            Ok(()) => info!("AoField: baked and cached {}", path.display()),
+            Err(error) => warn!(
                 "AoField: cannot cache the baked field in {}: {error}",
                 path.display()
-            );
-        } else {
-            info!("AoField: baked and cached {}", path.display());
+            ),
         }
     }
     Ok(field)
@@ -237,12 +253,18 @@ pub(crate) fn resolve_fields(
     mut fields: ResMut<Assets<AoFieldData>>,
     cache: Res<AoFieldCache>,
     mut baked: ResMut<BakedFields>,
-    mut warned: Local<HashSet<Entity>>,
-    mut degenerate: Local<HashSet<Entity>>,
-    mut posed_warned: Local<HashSet<Entity>>,
+    mut mesh_events: MessageReader<AssetEvent<Mesh>>,
+    mut warned: Local<HashSet<(Entity, FieldWarning)>>,
     mut joints: Local<Vec<Affine3A>>,
     mut seen_for: Local<HashMap<Entity, u32>>,
 ) {
+    // A mesh edited at runtime is baked again (its old field stays until the new one is ready).
+    for event in mesh_events.read() {
+        if let AssetEvent::Modified { id } = event {
+            baked.ready.retain(|key, _| key.0 != *id);
+            baked.pending.retain(|key, _| key.0 != *id);
+        }
+    }
     // Finished bakes become assets.
     let mut finished = Vec::new();
     for (key, task) in baked.pending.iter_mut() {
@@ -258,6 +280,9 @@ pub(crate) fn resolve_fields(
     }
     let (radius, near) = camera_reach(&cameras);
     seen_for.retain(|e, _| occluders.contains(*e));
+    warned.retain(|(e, _)| occluders.contains(*e));
+    // The bakes some occluder asks for this frame; the others are freed at the end.
+    let mut used = HashSet::new();
 
     for (entity, field, mesh, resolved, pending, name, transform, skinned, morphs) in &occluders {
         let label = || name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
@@ -267,7 +292,7 @@ pub(crate) fn resolve_fields(
             affine.is_finite() && affine.matrix3.determinant().abs() > 1e-12
         });
         if !placeable {
-            if degenerate.insert(entity) {
+            if warned.insert((entity, FieldWarning::Degenerate)) {
                 warn!(
                     "AoField on {}: its transform is zero-size or not finite; it casts no field \
                      while that lasts",
@@ -275,7 +300,7 @@ pub(crate) fn resolve_fields(
                 );
             }
         } else {
-            degenerate.remove(&entity);
+            warned.remove(&(entity, FieldWarning::Degenerate));
         }
         let (steps, scale) = if placeable {
             scale_steps(transform)
@@ -286,7 +311,7 @@ pub(crate) fn resolve_fields(
             AoField::Asset(handle) => Some(Ok((handle.clone(), Vec3::ONE))),
             AoField::Bake(settings) => {
                 let Some(mesh) = mesh else {
-                    if warned.insert(entity) {
+                    if warned.insert((entity, FieldWarning::NoMesh)) {
                         warn!(
                             "AoField::Bake on {} needs a Mesh3d on the same entity; it casts no \
                              field",
@@ -295,6 +320,26 @@ pub(crate) fn resolve_fields(
                     }
                     continue;
                 };
+                if meshes
+                    .get(mesh.id())
+                    .is_some_and(|m| m.try_attribute_option(Mesh::ATTRIBUTE_POSITION).is_err())
+                {
+                    if warned.insert((entity, FieldWarning::MeshNotReadable)) {
+                        warn!(
+                            "AoField::Bake on {}: its mesh's vertex data was moved to the render \
+                             world (RenderAssetUsages without MAIN_WORLD), so it cannot be baked; \
+                             it casts no field (keep MAIN_WORLD, or load a baked .aofield with \
+                             AoField::Asset)",
+                            label()
+                        );
+                    }
+                    if resolved.is_some() || pending {
+                        commands
+                            .entity(entity)
+                            .remove::<(ActiveAoField, PendingAoField)>();
+                    }
+                    continue;
+                }
                 let settings = settings.for_camera(radius, near);
                 let weights = mesh_morph_weights(morphs, &morph_weights);
                 let posed = skinned.is_some() || weights.iter().any(|w| *w != 0.0);
@@ -308,6 +353,7 @@ pub(crate) fn resolve_fields(
                 let frames = seen_for.entry(entity).or_insert(0);
                 *frames += 1;
                 let settled = !posed || *frames > POSE_FRAMES;
+                used.insert(key);
                 if let Some(result) = baked.ready.get(&key) {
                     Some(result.clone().map(|handle| (handle, scale)))
                 } else {
@@ -317,7 +363,7 @@ pub(crate) fn resolve_fields(
                     {
                         let pose = match (posed, transform) {
                             (true, Some(transform)) => {
-                                if posed_warned.insert(entity) {
+                                if warned.insert((entity, FieldWarning::Posed)) {
                                     warn!(
                                         "AoField on {}: a skinned or morphed mesh is baked in \
                                          the pose it has now and then moves rigidly with its \
@@ -365,7 +411,7 @@ pub(crate) fn resolve_fields(
                 if pending {
                     commands.entity(entity).remove::<PendingAoField>();
                 }
-                if warned.insert(entity) {
+                if warned.insert((entity, FieldWarning::Failed)) {
                     warn!("AoField on {} casts no field: {error}", label());
                 }
             }
@@ -376,4 +422,8 @@ pub(crate) fn resolve_fields(
             }
         }
     }
+    // A field no occluder asks for any more is freed once no `ActiveAoField` holds it; a bake
+    // nobody waits for is dropped (which cancels it).
+    baked.ready.retain(|key, _| used.contains(key));
+    baked.pending.retain(|key, _| used.contains(key));
 }

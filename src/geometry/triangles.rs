@@ -46,27 +46,31 @@ impl TriangleScene {
     }
 
     /// Adds the triangles of `mesh` placed by `world_from_local`. Meshes that are not
-    /// triangle lists or lack positions add nothing; degenerate or non-finite triangles are
+    /// triangle lists, lack positions or keep their data only in the render world add nothing; degenerate or non-finite triangles are
     /// counted in [`TriangleScene::skipped`].
     pub fn add_mesh(&mut self, mesh: &Mesh, world_from_local: Affine3A) {
         if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
             return;
         }
-        let Some(VertexAttributeValues::Float32x3(positions)) =
-            mesh.attribute(Mesh::ATTRIBUTE_POSITION)
+        // The `try_` accessors: a mesh whose data lives only in the render world makes the
+        // plain ones panic.
+        let Ok(Some(VertexAttributeValues::Float32x3(positions))) =
+            mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION)
         else {
             return;
         };
-        let normals = match mesh.attribute(Mesh::ATTRIBUTE_NORMAL) {
-            Some(VertexAttributeValues::Float32x3(normals)) if normals.len() == positions.len() => {
+        let normals = match mesh.try_attribute_option(Mesh::ATTRIBUTE_NORMAL) {
+            Ok(Some(VertexAttributeValues::Float32x3(normals)))
+                if normals.len() == positions.len() =>
+            {
                 Some(normals)
             }
             _ => None,
         };
         let normal_matrix = world_from_local.matrix3.inverse().transpose();
-        let indices: Vec<usize> = match mesh.indices() {
-            Some(indices) => indices.iter().collect(),
-            None => (0..positions.len()).collect(),
+        let indices: Vec<usize> = match mesh.try_indices_option() {
+            Ok(Some(indices)) => indices.iter().collect(),
+            _ => (0..positions.len()).collect(),
         };
         for tri in indices.chunks_exact(3) {
             if tri.iter().any(|&i| i >= positions.len()) {

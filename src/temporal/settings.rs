@@ -10,8 +10,8 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// along a low-discrepancy sequence, and each frame's result is averaged with the pixel's
 /// history, found where the pixel was last frame through Bevy's motion vectors (so moving,
 /// skinned and morphed meshes reproject correctly). A history whose depth or normal does not
-/// match the pixel (a disocclusion) is dropped, and a history outside the range of the pixel's
-/// neighbours this frame is clamped into it (no ghost trails). With it on, the image-space
+/// match the pixel (a disocclusion) is dropped, and a history far from the mean of this frame's
+/// values around the pixel is clamped toward it (no ghost trails). With it on, the image-space
 /// blur's radius is halved (the voxel term's is not).
 ///
 /// On by default: the default technique traces 2 rays per pixel and frame and relies on it to

@@ -23,6 +23,16 @@ pub(super) enum Unsupported {
 #[derive(Component)]
 pub(crate) struct SuspendedForEmptyViewport;
 
+/// Taking `DynamicAo` away from a camera takes away the `ScreenSpaceAmbientOcclusion` it
+/// required: the camera renders without ambient occlusion, as before it had the component (for
+/// Bevy's SSAO, keep `DynamicAo` with `AoTechnique::BevySsao`). The render world drops the view's
+/// state at the next extraction.
+pub(super) fn remove_required_ssao(remove: On<Remove, DynamicAo>, mut commands: Commands) {
+    if let Ok(mut camera) = commands.get_entity(remove.entity) {
+        camera.try_remove::<ScreenSpaceAmbientOcclusion>();
+    }
+}
+
 /// Cameras the plugin cannot serve lose Bevy's SSAO component (whose pass would fail on them)
 /// and get one warning; they get it back once the problem is gone.
 pub(super) fn check_cameras(

@@ -50,6 +50,7 @@ pub(crate) struct ViewPlugin;
 impl Plugin for ViewPlugin {
     fn build(&self, app: &mut App) {
         app.add_systems(PostUpdate, cameras::check_cameras)
+            .add_observer(cameras::remove_required_ssao)
             .add_plugins(UniformComponentPlugin::<DynamicAoUniform>::default());
     }
 

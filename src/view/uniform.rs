@@ -72,6 +72,16 @@ pub(crate) struct DynamicAoUniform {
     pub voxel_blur_radius: u32,
 }
 
+/// The render-world components a view has while it runs the plugin; each technique drops its
+/// own state on views without [`DynamicAoView`].
+type ViewState = (
+    DynamicAoView,
+    DynamicAoUniform,
+    FarFieldOutputs,
+    PendingPasses,
+    super::DynamicAoTextures,
+);
+
 pub(super) fn extract_views(
     mut commands: Commands,
     cameras: Extract<
@@ -86,18 +96,19 @@ pub(super) fn extract_views(
             With<Camera3d>,
         >,
     >,
+    // Render-world views persist across frames: a camera whose `DynamicAo` was taken away must
+    // lose its view state here, or our passes would go on with its last settings.
+    without: Extract<Query<RenderEntity, (With<Camera3d>, Without<DynamicAo>)>>,
     present: Res<FarTermsPresent>,
     frame_count: Extract<Res<FrameCount>>,
 ) {
+    for entity in &without {
+        commands.entity(entity).remove::<ViewState>();
+    }
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
         if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
-            entity_commands.remove::<(
-                DynamicAoView,
-                DynamicAoUniform,
-                FarFieldOutputs,
-                PendingPasses,
-            )>();
+            entity_commands.remove::<ViewState>();
             continue;
         }
         let params = ao.near_field.sanitized();

@@ -24,6 +24,7 @@ mod fields;
 mod half_resolution;
 mod harness;
 mod horizon;
+mod lifecycle;
 mod lighting;
 mod models;
 mod near_field;

@@ -17,7 +17,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 use super::format::{AoFieldData, MAX_RESOLUTION};
 use crate::geometry::bvh::Bvh;
-use crate::geometry::triangles::{Triangle, triangle_bounds};
+use crate::geometry::triangles::Triangle;
 use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
 /// How far a field's occlusion reaches, which also sets its grid's extent.
@@ -54,7 +54,8 @@ pub struct BakeSettings {
     pub resolution: u32,
     /// How far occlusion counts. Default: [`FieldReach::CameraRadius`].
     pub reach: FieldReach,
-    /// Rays per grid point over the whole sphere. Default: [`BakeSettings::DEFAULT_RAYS`] (256).
+    /// Rays per grid point over the whole sphere. Range 1 to [`BakeSettings::MAX_RAYS`].
+    /// Default: [`BakeSettings::DEFAULT_RAYS`] (256).
     pub rays: u32,
     /// Rescale values so the largest one on the grid's boundary becomes 0 (§3.4.1): no visible
     /// edge where an unlimited field ends. It lowers every value up to 0.3. Default: `false`: a
@@ -82,6 +83,9 @@ impl BakeSettings {
     pub const DEFAULT_RESOLUTION: u32 = 32;
     /// Default rays per grid point.
     pub const DEFAULT_RAYS: u32 = 256;
+    /// Most rays per grid point: past a few thousand the field's noise is below what 8-bit
+    /// lighting shows, and the bake's time grows with the rays.
+    pub const MAX_RAYS: u32 = 16_384;
 
     #[cfg(test)]
     fn without_fixes(self) -> Self {
@@ -176,6 +180,76 @@ fn sphere_directions(count: u32) -> Vec<Vec3> {
         .collect()
 }
 
+/// Whether a triangle takes part in a bake: finite and not degenerate.
+fn usable(t: &Triangle) -> bool {
+    t.vertices.iter().all(|v| v.is_finite()) && t.face_normal().length_squared() > f32::MIN_POSITIVE
+}
+
+/// The grid a bake of these triangles with these settings makes: what a cached field must match.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BakeGrid {
+    /// Centre of the grid box, mesh space, metres.
+    pub center: Vec3,
+    /// Half extents of the grid box, metres.
+    pub half_extent: Vec3,
+    /// Hits count within this, metres (∞: at any distance).
+    pub reach: f32,
+    /// Near hits count within this, metres (∞: at any distance).
+    pub near: f32,
+    /// Cells per axis.
+    pub resolution: UVec3,
+}
+
+impl BakeGrid {
+    /// The grid for the usable triangles among `triangles`, with `settings` resolved for a
+    /// camera; `None` without any usable triangle.
+    pub fn plan(triangles: &[Triangle], settings: &BakeSettings) -> Option<Self> {
+        let (min, max) = triangles
+            .iter()
+            .filter(|t| usable(t))
+            .flat_map(|t| t.vertices)
+            .fold(None, |bounds: Option<(Vec3, Vec3)>, v| {
+                Some(bounds.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+            })?;
+        let (center, half_extent, reach, near) = match settings.reach {
+            FieldReach::Distance { reach, near } => (
+                (min + max) * 0.5,
+                // Beyond the object's bounds grown by the reach no ray meets it: the field is 0.
+                (max - min) * 0.5 + Vec3::splat(reach),
+                reach,
+                near.min(reach),
+            ),
+            FieldReach::Unlimited { epsilon } => {
+                let (center, e) = grid_box(min, max, epsilon);
+                (center, e, f32::INFINITY, f32::INFINITY)
+            }
+            FieldReach::CameraRadius => {
+                let resolved = settings.for_camera(DEFAULT_RADIUS, DEFAULT_NEAR_FIELD_RADIUS);
+                return Self::plan(triangles, &resolved);
+            }
+        };
+        Some(Self {
+            center,
+            half_extent,
+            reach,
+            near,
+            resolution: grid_resolution(half_extent, settings.resolution),
+        })
+    }
+
+    /// Whether `field` is what a bake on this grid writes (a cached file is trusted only then).
+    pub fn matches(&self, field: &AoFieldData) -> bool {
+        let finite = |d: f32| if d.is_finite() { d } else { 0.0 };
+        let close =
+            |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1.0);
+        field.resolution == self.resolution
+            && close(field.center, self.center)
+            && close(field.half_extent, self.half_extent)
+            && field.reach == finite(self.reach)
+            && field.near_reach == finite(self.near)
+    }
+}
+
 /// Bakes the field of `triangles` (mesh space). [`FieldReach::CameraRadius`] bakes for the
 /// crate's default radius; the plugin resolves it with [`BakeSettings::for_camera`] first.
 /// `progress(done, total)` is called as slices of the grid finish, from the baking threads.
@@ -206,35 +280,24 @@ pub fn bake(
         }
         _ => {}
     }
-    if settings.rays == 0 {
-        return Err(BakeError::BadSettings("rays must be at least 1".into()));
+    if !(1..=BakeSettings::MAX_RAYS).contains(&settings.rays) {
+        return Err(BakeError::BadSettings(format!(
+            "rays {} is outside 1..={}",
+            settings.rays,
+            BakeSettings::MAX_RAYS
+        )));
     }
-    let triangles: Vec<Triangle> = triangles
-        .into_iter()
-        .filter(|t| {
-            t.vertices.iter().all(|v| v.is_finite())
-                && t.face_normal().length_squared() > f32::MIN_POSITIVE
-        })
-        .collect();
-    if triangles.is_empty() {
+    let triangles: Vec<Triangle> = triangles.into_iter().filter(usable).collect();
+    let Some(BakeGrid {
+        center,
+        half_extent,
+        reach,
+        near,
+        resolution,
+    }) = BakeGrid::plan(&triangles, &settings)
+    else {
         return Err(BakeError::NoTriangles);
-    }
-    let (min, max) = triangle_bounds(&triangles);
-    let (center, half_extent, reach, near) = match settings.reach {
-        FieldReach::Distance { reach, near } => (
-            (min + max) * 0.5,
-            // Beyond the object's bounds grown by the reach no ray meets it: the field is 0.
-            (max - min) * 0.5 + Vec3::splat(reach),
-            reach,
-            near.min(reach),
-        ),
-        FieldReach::Unlimited { epsilon } => {
-            let (center, e) = grid_box(min, max, epsilon);
-            (center, e, f32::INFINITY, f32::INFINITY)
-        }
-        FieldReach::CameraRadius => unreachable!("resolved above"),
     };
-    let resolution = grid_resolution(half_extent, settings.resolution);
     let bvh = Bvh::new(triangles);
     let directions = sphere_directions(settings.rays);
     let cell_size = 2.0 * half_extent / resolution.as_vec3();

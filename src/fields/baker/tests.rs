@@ -194,6 +194,15 @@ fn bad_input_is_refused() {
             rays: 0,
             ..default()
         },
+        // Past the cap: `u32::MAX` rays would take the process down before a single cell.
+        BakeSettings {
+            rays: u32::MAX,
+            ..default()
+        },
+        BakeSettings {
+            rays: BakeSettings::MAX_RAYS + 1,
+            ..default()
+        },
     ] {
         assert!(matches!(
             bake(cube(), &settings, &|_, _| {}),

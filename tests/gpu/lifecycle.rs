@@ -1,0 +1,290 @@
+//! Runtime changes a running game makes: components taken away and given back, assets edited and
+//! reloaded, meshes whose data the CPU cannot read. Each reads the image before and after.
+
+use bevy::asset::RenderAssetUsages;
+use bevy::math::Affine3A;
+use bevy::mesh::VertexAttributeValues;
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::prelude::*;
+use bevy_dynamic_ao::FieldShading;
+use bevy_dynamic_ao::fields::{
+    ActiveAoField, AoFieldCache, AoFieldData, BakeSettings, FieldReach, bake,
+};
+use bevy_dynamic_ao::geometry::triangles::TriangleScene;
+use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::reference::fields::field_occlusion;
+
+use crate::harness::{Gpu, difference_stats, plain_ao};
+use crate::scenes;
+
+fn mean(v: &[f32]) -> f32 {
+    v.iter().sum::<f32>() / v.len() as f32
+}
+
+/// Largest difference of any channel between two lit images.
+fn largest_difference(a: &[Vec3], b: &[Vec3]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).abs().max_element())
+        .fold(0.0, f32::max)
+}
+
+fn luminance(image: &[Vec3]) -> f32 {
+    image
+        .iter()
+        .map(|c| c.dot(Vec3::new(0.2126, 0.7152, 0.0722)))
+        .sum::<f32>()
+        / image.len() as f32
+}
+
+#[test]
+fn taking_dynamic_ao_away_turns_the_cameras_ao_off_and_giving_it_back_restores_it() {
+    let ao = DynamicAo {
+        temporal: AoTemporal::OFF,
+        ..plain_ao()
+    };
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), ao.clone());
+    let with_ao = gpu.color(4);
+    gpu.set_ao(|ao| ao.technique = AoTechnique::Off);
+    let no_ao = gpu.color(4);
+    gpu.set_ao(|a| *a = ao.clone());
+    gpu.update(4);
+
+    let camera = gpu.camera;
+    gpu.app.world_mut().entity_mut(camera).remove::<DynamicAo>();
+    let removed = gpu.color(4);
+    assert!(
+        !gpu.app
+            .world()
+            .entity(camera)
+            .contains::<ScreenSpaceAmbientOcclusion>(),
+        "the SSAO component DynamicAo required goes with it"
+    );
+    gpu.app.world_mut().entity_mut(camera).insert(ao);
+    let restored = gpu.color(6);
+    let (l_ao, l_off, l_removed, l_restored) = (
+        luminance(&with_ao),
+        luminance(&no_ao),
+        luminance(&removed),
+        luminance(&restored),
+    );
+    println!(
+        "mean luminance: with AO {l_ao:.4}, technique Off {l_off:.4}, DynamicAo removed \
+         {l_removed:.4}, given back {l_restored:.4}; largest difference removed vs Off {:.4}, \
+         given back vs before {:.4}",
+        largest_difference(&removed, &no_ao),
+        largest_difference(&restored, &with_ao)
+    );
+    let darkened = largest_difference(&with_ao, &no_ao);
+    assert!(
+        l_ao < l_off && darkened > 0.02,
+        "the AO should darken the image (largest difference {darkened})"
+    );
+    // Taken away: no AO at all, as with the technique off (8-bit rounding aside).
+    assert!(largest_difference(&removed, &no_ao) < 0.01);
+    // Given back: the same image as before (the static noise pattern, no accumulation).
+    assert!(largest_difference(&restored, &with_ao) < 0.01);
+}
+
+fn fields_only() -> DynamicAo {
+    DynamicAo {
+        technique: AoTechnique::Off,
+        spheres: false,
+        field_shading: FieldShading::Cone,
+        ..plain_ao()
+    }
+}
+
+fn cube_field(size: f32, resolution: u32) -> AoFieldData {
+    let mut scene = TriangleScene::default();
+    scene.add_mesh(&Cuboid::from_length(size).into(), Affine3A::IDENTITY);
+    let settings = BakeSettings {
+        resolution,
+        rays: 64,
+        reach: FieldReach::Distance {
+            reach: 1.0,
+            near: 0.3,
+        },
+        ..default()
+    };
+    bake(scene.triangles, &settings, &|_, _| {}).expect("a cube bakes")
+}
+
+/// The visibility the CPU evaluates for `field` on the cube of `cube_on_plane`, against what the
+/// GPU drew: mean and 99th percentile of the difference.
+fn against_cpu(gpu: &mut Gpu, field: &AoFieldData, frames: u32) -> (f32, f32) {
+    let frame = gpu.frame(frames);
+    let placed = [(field, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)))];
+    let cpu: Vec<f32> = field_occlusion(
+        &frame.nd,
+        &frame.view,
+        &placed,
+        FieldShading::Cone,
+        0.0,
+        false,
+    )
+    .into_iter()
+    .map(|o| 1.0 - o)
+    .collect();
+    difference_stats(&frame.visibility, &cpu, &frame.geometry_mask())
+}
+
+/// A field changed in place (what a hot-reloaded `.aofield` file does) is uploaded again: the
+/// image follows the new field, of another resolution, as the CPU evaluates it.
+#[test]
+fn a_field_changed_in_place_is_drawn_as_the_new_field() {
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), fields_only());
+    let (first, second) = (cube_field(1.0, 8), cube_field(1.0, 16));
+    assert_ne!(first.resolution, second.resolution);
+    let world = gpu.app.world_mut();
+    let handle = world
+        .resource_mut::<Assets<AoFieldData>>()
+        .add(first.clone());
+    let cube = world
+        .query_filtered::<Entity, With<Mesh3d>>()
+        .iter(world)
+        .nth(1)
+        .expect("the cube");
+    world
+        .entity_mut(cube)
+        .insert(AoField::Asset(handle.clone()));
+    // The first field also brings the field pass in, which takes a few frames to hand over.
+    let before = against_cpu(&mut gpu, &first, 8);
+    *gpu.app
+        .world_mut()
+        .resource_mut::<Assets<AoFieldData>>()
+        .get_mut(&handle)
+        .expect("the field") = second.clone();
+    let after = against_cpu(&mut gpu, &second, 3);
+    println!("GPU vs CPU (mean, 99th percentile): first field {before:?}, changed {after:?}");
+    assert!(before.0 < 0.002 && before.1 < 0.01, "{before:?}");
+    assert!(after.0 < 0.002 && after.1 < 0.01, "{after:?}");
+}
+
+/// Waits until `count` occluders have their field.
+fn wait_for_fields(gpu: &mut Gpu, count: usize) {
+    for _ in 0..400 {
+        gpu.update(1);
+        let world = gpu.app.world_mut();
+        if world
+            .query_filtered::<(), With<ActiveAoField>>()
+            .iter(world)
+            .count()
+            >= count
+        {
+            return;
+        }
+    }
+    panic!("{count} fields were not baked in 400 frames");
+}
+
+/// Taking `AoField` away stops the object casting on the next frames and frees its baked field;
+/// giving it back bakes it again. Editing the mesh bakes it again at its new size. A mesh whose
+/// data lives only in the render world gets no field, and no panic.
+#[test]
+fn fields_follow_their_component_and_their_mesh() {
+    let mut scene = scenes::cube_on_plane();
+    let field = AoField::Bake(BakeSettings {
+        resolution: 12,
+        rays: 64,
+        ..default()
+    });
+    scene.fields.push((1, field.clone()));
+    let mut gpu = Gpu::new(&scene, fields_only());
+    gpu.app
+        .world_mut()
+        .insert_resource(AoFieldCache { folder: None });
+    // A mesh the CPU cannot read once it is uploaded, beside the scene; it gets its `AoField`
+    // once its data has gone to the render world.
+    let world = gpu.app.world_mut();
+    let mut render_only = Mesh::from(Cuboid::from_length(0.3));
+    render_only.asset_usage = RenderAssetUsages::RENDER_WORLD;
+    let render_only = world.resource_mut::<Assets<Mesh>>().add(render_only);
+    let hidden = world
+        .spawn((Mesh3d(render_only), Transform::from_xyz(-3.0, 0.15, -3.0)))
+        .id();
+    gpu.update(3);
+    gpu.app.world_mut().entity_mut(hidden).insert(field.clone());
+    wait_for_fields(&mut gpu, 1);
+    let cube = {
+        let world = gpu.app.world_mut();
+        world
+            .query_filtered::<Entity, With<ActiveAoField>>()
+            .single(world)
+            .expect("one field")
+    };
+    let cast = gpu.frame(3);
+    let darkest = cast.visibility.iter().copied().fold(1.0, f32::min);
+
+    gpu.app.world_mut().entity_mut(cube).remove::<AoField>();
+    let gone = gpu.frame(3);
+    let fields_left = gpu.app.world().resource::<Assets<AoFieldData>>().len();
+
+    gpu.app.world_mut().entity_mut(cube).insert(field);
+    wait_for_fields(&mut gpu, 1);
+    let back = gpu.frame(3);
+    let first_extent = active_extent(&mut gpu, cube);
+
+    // The mesh grows to twice its size: its field is baked again for the new mesh.
+    let mesh = gpu.app.world().get::<Mesh3d>(cube).unwrap().0.clone();
+    if let Some(VertexAttributeValues::Float32x3(positions)) = gpu
+        .app
+        .world_mut()
+        .resource_mut::<Assets<Mesh>>()
+        .get_mut(&mesh)
+        .unwrap()
+        .attribute_mut(Mesh::ATTRIBUTE_POSITION)
+    {
+        for p in positions {
+            *p = p.map(|c| c * 2.0);
+        }
+    }
+    let mut grown_extent = first_extent;
+    for _ in 0..400 {
+        gpu.update(1);
+        grown_extent = active_extent(&mut gpu, cube);
+        if grown_extent != first_extent {
+            break;
+        }
+    }
+    println!(
+        "darkest visibility: casting {darkest:.3}, AoField taken away {:.3} ({fields_left} \
+         fields left), given back {:.3}; grid half extent {first_extent} -> {grown_extent}",
+        gone.visibility.iter().copied().fold(1.0, f32::min),
+        back.visibility.iter().copied().fold(1.0, f32::min),
+    );
+    assert!(darkest < 0.8, "the cube's field should darken the floor");
+    assert_eq!(
+        mean(&gone.visibility),
+        1.0,
+        "nothing casts once AoField is gone"
+    );
+    assert_eq!(fields_left, 0, "the field nobody uses is freed");
+    assert!(
+        (mean(&back.visibility) - mean(&cast.visibility)).abs() < 1e-4,
+        "given back, the field casts as before"
+    );
+    // Half extents grow by half the growth of the box (0.5 m per side).
+    assert!(
+        (grown_extent - first_extent - Vec3::splat(0.5))
+            .abs()
+            .max_element()
+            < 1e-3,
+        "the edited mesh was baked again: {first_extent} -> {grown_extent}"
+    );
+    assert!(
+        !gpu.app.world().entity(hidden).contains::<ActiveAoField>(),
+        "a mesh the CPU cannot read gets no field"
+    );
+}
+
+fn active_extent(gpu: &mut Gpu, entity: Entity) -> Vec3 {
+    let world = gpu.app.world();
+    let Some(active) = world.get::<ActiveAoField>(entity) else {
+        return Vec3::ZERO;
+    };
+    world
+        .resource::<Assets<AoFieldData>>()
+        .get(&active.field)
+        .map_or(Vec3::ZERO, |f| f.half_extent / active.baked_scale)
+}
