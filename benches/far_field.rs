@@ -22,6 +22,9 @@ mod far_terms;
 #[path = "../tests/gpu/harness.rs"]
 #[allow(dead_code)]
 mod harness;
+#[path = "../tests/gpu/log_capture.rs"]
+#[allow(dead_code)]
+mod log_capture;
 #[path = "../tests/gpu/models.rs"]
 mod models;
 #[path = "../tests/gpu/scenes.rs"]

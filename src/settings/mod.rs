@@ -185,6 +185,62 @@ impl DynamicAo {
         }
     }
 
+    /// What is out of range in these settings and what is used instead, one line each (empty
+    /// when every value is valid). The plugin logs each line once per camera.
+    pub fn problems(&self) -> Vec<String> {
+        let mut problems = Vec::new();
+        let mut check =
+            |name: &str, set: &dyn std::fmt::Debug, used: &dyn std::fmt::Debug, ok: bool| {
+                if !ok {
+                    problems.push(format!("{name} {set:?} is out of range; using {used:?}"));
+                }
+            };
+        let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
+        check(
+            "radius",
+            &self.radius,
+            &self.effective_radius(),
+            same(self.radius, self.effective_radius()),
+        );
+        check(
+            "near_field_radius",
+            &self.near_field_radius,
+            &self.effective_near_field_radius(),
+            same(self.near_field_radius, self.effective_near_field_radius()),
+        );
+        check(
+            "intensity",
+            &self.intensity,
+            &self.effective_intensity(),
+            same(self.intensity, self.effective_intensity()),
+        );
+        let near_field = self.near_field.sanitized();
+        check(
+            "near_field",
+            &self.near_field,
+            &near_field,
+            near_field == self.near_field,
+        );
+        let horizon = self.horizon.sanitized();
+        check("horizon", &self.horizon, &horizon, horizon == self.horizon);
+        let ray_march = self.ray_march.sanitized();
+        check(
+            "ray_march",
+            &self.ray_march,
+            &ray_march,
+            ray_march == self.ray_march,
+        );
+        let blur = self.blur.sanitized();
+        check("blur", &self.blur, &blur, blur == self.blur);
+        check(
+            "temporal.max_frames",
+            &self.temporal.max_frames,
+            &self.temporal.frames(),
+            self.temporal.max_frames == self.temporal.frames(),
+        );
+        problems
+    }
+
     /// The intensity actually used: non-finite or negative values fall back to the default.
     pub fn effective_intensity(&self) -> f32 {
         if self.intensity.is_finite() && self.intensity >= 0.0 {

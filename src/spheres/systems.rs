@@ -126,6 +126,8 @@ pub(crate) enum Problem {
     SkinWithoutJointData,
     MissingJoint,
     NonFinite,
+    /// The component's own settings are out of range (said for the entity that carries it).
+    Settings,
 }
 
 type MeshQuery<'w, 's> = Query<
@@ -145,7 +147,7 @@ type MeshQuery<'w, 's> = Query<
 /// Every mesh under a [`SphereOccluder`] gets its spheres for this frame.
 pub(crate) fn refit_spheres(
     mut commands: Commands,
-    occluders: Query<(Entity, &SphereOccluder)>,
+    occluders: Query<(Entity, &SphereOccluder, Option<&Name>)>,
     children: Query<&Children>,
     mut mesh_entities: MeshQuery,
     transforms: Query<&GlobalTransform>,
@@ -159,8 +161,16 @@ pub(crate) fn refit_spheres(
 ) {
     // A mesh's own occluder wins over one on an ancestor.
     let mut targets: HashMap<Entity, SphereOccluder> = HashMap::default();
-    for (root, occluder) in &occluders {
-        let occluder = occluder.sanitized();
+    for (root, set, name) in &occluders {
+        let occluder = set.sanitized();
+        if occluder != *set && warned.insert((root, Problem::Settings)) {
+            let label = name.map_or_else(|| format!("{root}"), |n| format!("'{n}' ({root})"));
+            warn!(
+                "SphereOccluder on {label}: {set:?} is out of range (count 1..={}, ε in (0, 1)); \
+                 using {occluder:?}",
+                SphereOccluder::MAX_COUNT
+            );
+        }
         targets.insert(root, occluder);
         for entity in children.iter_descendants(root) {
             if !occluders.contains(entity) {

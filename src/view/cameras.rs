@@ -23,6 +23,11 @@ pub(super) enum Unsupported {
 #[derive(Component)]
 pub(crate) struct SuspendedForEmptyViewport;
 
+/// A camera as warnings name it: its `Name` and entity, or the entity.
+fn label(entity: Entity, name: Option<&Name>) -> String {
+    name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"))
+}
+
 /// Taking `DynamicAo` away from a camera takes away the `ScreenSpaceAmbientOcclusion` it
 /// required: the camera renders without ambient occlusion, as before it had the component (for
 /// Bevy's SSAO, keep `DynamicAo` with `AoTechnique::BevySsao`). The render world drops the view's
@@ -37,20 +42,29 @@ pub(super) fn remove_required_ssao(remove: On<Remove, DynamicAo>, mut commands: 
 /// and get one warning; they get it back once the problem is gone.
 pub(super) fn check_cameras(
     mut commands: Commands,
-    mut cameras: Query<
-        (
-            Entity,
-            &mut Camera,
-            &Msaa,
-            Has<ScreenSpaceAmbientOcclusion>,
-            Has<SuspendedForEmptyViewport>,
-            Option<&Name>,
-        ),
-        With<DynamicAo>,
-    >,
+    mut cameras: Query<(
+        Entity,
+        &DynamicAo,
+        &mut Camera,
+        &Msaa,
+        Has<ScreenSpaceAmbientOcclusion>,
+        Has<SuspendedForEmptyViewport>,
+        Option<&Name>,
+    )>,
     mut warned: Local<HashSet<(Entity, Unsupported)>>,
+    mut warned_settings: Local<HashSet<(Entity, String)>>,
 ) {
-    for (entity, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
+    warned.retain(|(entity, _)| cameras.contains(*entity));
+    warned_settings.retain(|(entity, _)| cameras.contains(*entity));
+    for (entity, ao, .., name) in &cameras {
+        for problem in ao.problems() {
+            if !warned_settings.contains(&(entity, problem.clone())) {
+                warn!("DynamicAo on camera {}: {problem}", label(entity, name));
+                warned_settings.insert((entity, problem));
+            }
+        }
+    }
+    for (entity, _, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
         let empty_viewport = camera
             .viewport
             .as_ref()
@@ -74,8 +88,7 @@ pub(super) fn check_cameras(
         match problem {
             Some(problem) => {
                 if warned.insert((entity, problem)) {
-                    let label =
-                        name.map_or_else(|| format!("{entity}"), |n| format!("'{n}' ({entity})"));
+                    let label = label(entity, name);
                     match problem {
                         Unsupported::Msaa => warn!(
                             "DynamicAo on camera {label} needs Msaa::Off (it is {msaa:?}); \

@@ -7,7 +7,8 @@ use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::{Gpu, SceneSpec, plain_ao};
+use crate::harness::{Gpu, plain_ao};
+use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
 fn mean_luminance(image: &[Vec3]) -> f32 {
@@ -18,8 +19,16 @@ fn mean_luminance(image: &[Vec3]) -> f32 {
 fn msaa_camera_renders_without_ao() {
     let mut gpu = Gpu::new(&scenes::cube_on_plane(), plain_ao());
     let camera = gpu.camera;
-    gpu.app.world_mut().entity_mut(camera).insert(Msaa::Sample4);
+    gpu.app
+        .world_mut()
+        .entity_mut(camera)
+        .insert((Msaa::Sample4, Name::new("msaa camera")));
     let image = gpu.color(6);
+    assert_logged_once(&[
+        "'msaa camera'",
+        "needs Msaa::Off",
+        "without ambient occlusion",
+    ]);
     assert!(
         gpu.app
             .world()
@@ -43,6 +52,10 @@ fn zero_size_viewport_does_not_panic() {
     let camera = gpu.camera;
     gpu.app
         .world_mut()
+        .entity_mut(camera)
+        .insert(Name::new("empty viewport camera"));
+    gpu.app
+        .world_mut()
         .get_mut::<Camera>(camera)
         .unwrap()
         .viewport = Some(Viewport {
@@ -51,6 +64,7 @@ fn zero_size_viewport_does_not_panic() {
         ..default()
     });
     gpu.update(6);
+    assert_logged_once(&["'empty viewport camera'", "zero-size viewport"]);
     gpu.app
         .world_mut()
         .get_mut::<Camera>(camera)
@@ -117,23 +131,112 @@ fn mesh_without_normals_and_nan_transform_do_not_break_the_frame() {
     );
 }
 
+/// Out-of-range settings are replaced by valid ones, each with one warning naming the value and
+/// what is used instead; the image is the one the replacements give.
 #[test]
 fn bad_settings_fall_back_to_defaults() {
-    let ao = DynamicAo {
+    let bad = DynamicAo {
         radius: f32::NAN,
         intensity: f32::INFINITY,
+        near_field_radius: -1.0,
+        horizon: HorizonParams {
+            directions: 0,
+            ..default()
+        },
+        blur: AoBlur {
+            sharpness: f32::NAN,
+            ..default()
+        },
+        temporal: AoTemporal {
+            max_frames: 0,
+            ..AoTemporal::OFF
+        },
         ..plain_ao()
     };
-    let mut gpu = Gpu::new(
-        &SceneSpec {
-            ..scenes::cube_on_plane()
-        },
-        ao,
-    );
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), bad);
+    let camera = gpu.camera;
+    gpu.app
+        .world_mut()
+        .entity_mut(camera)
+        .insert(Name::new("bad settings camera"));
     let frame = gpu.frame(4);
-    assert!(frame.visibility.iter().all(|v| v.is_finite()));
+    let camera = "'bad settings camera'";
+    assert_logged_once(&[camera, "radius NaN is out of range; using 0.75"]);
+    assert_logged_once(&[camera, "intensity inf is out of range; using 1.0"]);
+    assert_logged_once(&[camera, "near_field_radius -1.0 is out of range; using 0.5"]);
+    assert_logged_once(&[camera, "horizon", "directions: 0", "directions: 1"]);
+    assert_logged_once(&[camera, "blur", "sharpness: NaN"]);
+    assert_logged_once(&[camera, "temporal.max_frames 0 is out of range; using 1"]);
+    // The fallback: the image of the replacements, which are the defaults for what this
+    // technique reads.
+    gpu.set_ao(|ao| *ao = plain_ao());
+    let valid = gpu.frame(4);
+    let largest = frame
+        .visibility
+        .iter()
+        .zip(&valid.visibility)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(
+        largest < 1e-6,
+        "bad settings should render as their replacements, off by {largest}"
+    );
     assert!(
         frame.visibility.iter().any(|v| *v < 0.8),
         "defaults should still give AO"
     );
+}
+
+/// A `SphereOccluder` with no proxies and a NaN ε gets one warning and casts as one proxy with the
+/// paper's ε would.
+#[test]
+fn bad_sphere_occluder_settings_are_replaced_with_a_warning() {
+    let bad = SphereOccluder {
+        count: 0,
+        reach: ProxyReach::Epsilon(f32::NAN),
+        ..default()
+    };
+    let valid = SphereOccluder {
+        count: 1,
+        reach: ProxyReach::Epsilon(SphereOccluder::PAPER_EPSILON),
+        ..default()
+    };
+    let far_only = DynamicAo {
+        technique: AoTechnique::Off,
+        ..plain_ao()
+    };
+    let scene = |occluder| {
+        scenes::cube_on_plane().with_occluder(
+            Cuboid::new(0.6, 0.6, 0.6),
+            Transform::from_xyz(1.2, 0.3, -0.6),
+            occluder,
+        )
+    };
+    let mut gpu = Gpu::new(&scene(bad), far_only.clone());
+    let occluder = {
+        let world = gpu.app.world_mut();
+        world
+            .query_filtered::<Entity, With<SphereOccluder>>()
+            .single(world)
+            .unwrap()
+    };
+    gpu.app
+        .world_mut()
+        .entity_mut(occluder)
+        .insert(Name::new("bad proxies"));
+    let replaced = gpu.frame(4);
+    drop(gpu);
+    assert_logged_once(&["'bad proxies'", "count: 0", "is out of range", "count: 1"]);
+    let expected = Gpu::new(&scene(valid), far_only).frame(4);
+    let largest = replaced
+        .visibility
+        .iter()
+        .zip(&expected.visibility)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(
+        replaced.visibility.iter().any(|v| *v < 0.95),
+        "the replaced occluder should still cast"
+    );
+    assert!(largest < 1e-6, "off by {largest}");
 }

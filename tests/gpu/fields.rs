@@ -14,6 +14,7 @@ use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
 use crate::harness::{GPU_TURN, Gpu, difference_stats, plain_ao};
+use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
 fn small_field() -> AoFieldData {
@@ -277,18 +278,29 @@ fn baked_fields_are_cached_on_disk_and_bad_occluders_are_skipped() {
             let cube = world
                 .resource_mut::<Assets<Mesh>>()
                 .add(Cuboid::new(0.5, 0.5, 0.5));
-            world.spawn((Mesh3d(empty), quick_field(), Transform::IDENTITY));
+            world.spawn((
+                Mesh3d(empty),
+                quick_field(),
+                Transform::IDENTITY,
+                Name::new("empty field mesh"),
+            ));
             world.spawn((
                 Mesh3d(cube.clone()),
                 quick_field(),
                 Transform::from_scale(Vec3::ZERO),
+                Name::new("zero-scale field"),
             ));
             world.spawn((
                 Mesh3d(cube),
                 quick_field(),
                 Transform::from_xyz(f32::NAN, 0.0, 0.0),
+                Name::new("NaN field"),
             ));
-            world.spawn((quick_field(), Transform::IDENTITY));
+            world.spawn((
+                quick_field(),
+                Transform::IDENTITY,
+                Name::new("field without mesh"),
+            ));
         }
         for _ in 0..400 {
             gpu.update(1);
@@ -315,6 +327,17 @@ fn baked_fields_are_cached_on_disk_and_bad_occluders_are_skipped() {
     assert!(AoFieldData::from_bytes(&std::fs::read(&files[0]).unwrap()).is_ok());
     std::fs::write(&files[0], b"garbage").unwrap();
     run(true);
+    // Each bad occluder said why, once.
+    assert_logged_once(&["'empty field mesh'", "casts no field", "no usable triangle"]);
+    assert_logged_once(&["'zero-scale field'", "zero-size or not finite"]);
+    assert_logged_once(&["'NaN field'", "zero-size or not finite"]);
+    assert_logged_once(&["'field without mesh'", "needs a Mesh3d"]);
+    let folder = cache.to_string_lossy();
+    assert_logged_once(&[
+        "ignoring cached",
+        &folder,
+        "bytes where this mesh's field takes",
+    ]);
     let bytes = std::fs::read(&files[0]).unwrap();
     assert!(
         AoFieldData::from_bytes(&bytes).is_ok(),

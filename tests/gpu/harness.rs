@@ -151,10 +151,12 @@ impl Gpu {
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         let mut app = App::new();
-        let plugins = common::headless_plugins().set(bevy::render::RenderPlugin {
-            synchronous_pipeline_compilation: synchronous,
-            ..default()
-        });
+        let plugins = common::headless_plugins()
+            .set(bevy::render::RenderPlugin {
+                synchronous_pipeline_compilation: synchronous,
+                ..default()
+            })
+            .set(crate::log_capture::log_plugin());
         match folder {
             Some(folder) => app.add_plugins((
                 plugins.set(bevy::asset::AssetPlugin {

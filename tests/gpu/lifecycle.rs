@@ -15,6 +15,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::harness::{Gpu, difference_stats, plain_ao};
+use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
 fn mean(v: &[f32]) -> f32 {
@@ -201,7 +202,11 @@ fn fields_follow_their_component_and_their_mesh() {
     render_only.asset_usage = RenderAssetUsages::RENDER_WORLD;
     let render_only = world.resource_mut::<Assets<Mesh>>().add(render_only);
     let hidden = world
-        .spawn((Mesh3d(render_only), Transform::from_xyz(-3.0, 0.15, -3.0)))
+        .spawn((
+            Mesh3d(render_only),
+            Transform::from_xyz(-3.0, 0.15, -3.0),
+            Name::new("render-only mesh"),
+        ))
         .id();
     gpu.update(3);
     gpu.app.world_mut().entity_mut(hidden).insert(field.clone());
@@ -276,6 +281,11 @@ fn fields_follow_their_component_and_their_mesh() {
         !gpu.app.world().entity(hidden).contains::<ActiveAoField>(),
         "a mesh the CPU cannot read gets no field"
     );
+    assert_logged_once(&[
+        "'render-only mesh'",
+        "moved to the render world",
+        "casts no field",
+    ]);
 }
 
 fn active_extent(gpu: &mut Gpu, entity: Entity) -> Vec3 {

@@ -26,6 +26,7 @@ mod harness;
 mod horizon;
 mod lifecycle;
 mod lighting;
+mod log_capture;
 mod models;
 mod near_field;
 mod presets;
