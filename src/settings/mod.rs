@@ -188,57 +188,34 @@ impl DynamicAo {
     /// What is out of range in these settings and what is used instead, one line each (empty
     /// when every value is valid). The plugin logs each line once per camera.
     pub fn problems(&self) -> Vec<String> {
-        let mut problems = Vec::new();
-        let mut check =
-            |name: &str, set: &dyn std::fmt::Debug, used: &dyn std::fmt::Debug, ok: bool| {
-                if !ok {
-                    problems.push(format!("{name} {set:?} is out of range; using {used:?}"));
-                }
-            };
-        let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
-        check(
-            "radius",
-            &self.radius,
-            &self.effective_radius(),
-            same(self.radius, self.effective_radius()),
+        let used = (
+            self.effective_radius(),
+            self.effective_near_field_radius(),
+            self.effective_intensity(),
+            self.near_field.sanitized(),
+            self.horizon.sanitized(),
+            self.ray_march.sanitized(),
+            self.blur.sanitized(),
+            self.temporal.frames(),
         );
-        check(
-            "near_field_radius",
-            &self.near_field_radius,
-            &self.effective_near_field_radius(),
-            same(self.near_field_radius, self.effective_near_field_radius()),
-        );
-        check(
-            "intensity",
-            &self.intensity,
-            &self.effective_intensity(),
-            same(self.intensity, self.effective_intensity()),
-        );
-        let near_field = self.near_field.sanitized();
-        check(
-            "near_field",
-            &self.near_field,
-            &near_field,
-            near_field == self.near_field,
-        );
-        let horizon = self.horizon.sanitized();
-        check("horizon", &self.horizon, &horizon, horizon == self.horizon);
-        let ray_march = self.ray_march.sanitized();
-        check(
-            "ray_march",
-            &self.ray_march,
-            &ray_march,
-            ray_march == self.ray_march,
-        );
-        let blur = self.blur.sanitized();
-        check("blur", &self.blur, &blur, blur == self.blur);
-        check(
-            "temporal.max_frames",
-            &self.temporal.max_frames,
-            &self.temporal.frames(),
-            self.temporal.max_frames == self.temporal.frames(),
-        );
-        problems
+        // Compared as printed: a NaN differs from any replacement, as it should.
+        let values: [(&str, &dyn std::fmt::Debug, &dyn std::fmt::Debug); 8] = [
+            ("radius", &self.radius, &used.0),
+            ("near_field_radius", &self.near_field_radius, &used.1),
+            ("intensity", &self.intensity, &used.2),
+            ("near_field", &self.near_field, &used.3),
+            ("horizon", &self.horizon, &used.4),
+            ("ray_march", &self.ray_march, &used.5),
+            ("blur", &self.blur, &used.6),
+            ("temporal.max_frames", &self.temporal.max_frames, &used.7),
+        ];
+        values
+            .into_iter()
+            .filter_map(|(name, set, used)| {
+                let (set, used) = (format!("{set:?}"), format!("{used:?}"));
+                (set != used).then(|| format!("{name} {set} is out of range; using {used}"))
+            })
+            .collect()
     }
 
     /// The intensity actually used: non-finite or negative values fall back to the default.

@@ -100,3 +100,32 @@ fn names_round_trip() {
 fn default<T: Default>() -> T {
     T::default()
 }
+
+#[test]
+fn problems_name_each_bad_value_and_its_replacement() {
+    assert!(DynamicAo::default().problems().is_empty());
+    for preset in AoPreset::ALL {
+        assert!(DynamicAo::from_preset(preset).problems().is_empty());
+    }
+    let bad = DynamicAo {
+        radius: -2.0,
+        intensity: f32::NAN,
+        ray_march: RayMarchParams {
+            directions: 0,
+            ..default()
+        },
+        ..default()
+    };
+    assert_eq!(
+        bad.problems(),
+        [
+            "radius -2.0 is out of range; using 0.75".to_string(),
+            "intensity NaN is out of range; using 1.0".to_string(),
+            format!(
+                "ray_march {:?} is out of range; using {:?}",
+                bad.ray_march,
+                bad.ray_march.sanitized()
+            ),
+        ]
+    );
+}

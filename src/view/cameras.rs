@@ -44,7 +44,7 @@ pub(super) fn check_cameras(
     mut commands: Commands,
     mut cameras: Query<(
         Entity,
-        &DynamicAo,
+        Ref<DynamicAo>,
         &mut Camera,
         &Msaa,
         Has<ScreenSpaceAmbientOcclusion>,
@@ -57,6 +57,10 @@ pub(super) fn check_cameras(
     warned.retain(|(entity, _)| cameras.contains(*entity));
     warned_settings.retain(|(entity, _)| cameras.contains(*entity));
     for (entity, ao, .., name) in &cameras {
+        // Settings are checked when they change, not every frame.
+        if !ao.is_changed() {
+            continue;
+        }
         for problem in ao.problems() {
             if !warned_settings.contains(&(entity, problem.clone())) {
                 warn!("DynamicAo on camera {}: {problem}", label(entity, name));

@@ -7,7 +7,7 @@ use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::{Gpu, plain_ao};
+use crate::harness::{Gpu, largest_difference, plain_ao};
 use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
@@ -171,12 +171,7 @@ fn bad_settings_fall_back_to_defaults() {
     // technique reads.
     gpu.set_ao(|ao| *ao = plain_ao());
     let valid = gpu.frame(4);
-    let largest = frame
-        .visibility
-        .iter()
-        .zip(&valid.visibility)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
+    let largest = largest_difference(&frame.visibility, &valid.visibility);
     assert!(
         largest < 1e-6,
         "bad settings should render as their replacements, off by {largest}"
@@ -228,12 +223,7 @@ fn bad_sphere_occluder_settings_are_replaced_with_a_warning() {
     drop(gpu);
     assert_logged_once(&["'bad proxies'", "count: 0", "is out of range", "count: 1"]);
     let expected = Gpu::new(&scene(valid), far_only).frame(4);
-    let largest = replaced
-        .visibility
-        .iter()
-        .zip(&expected.visibility)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
+    let largest = largest_difference(&replaced.visibility, &expected.visibility);
     assert!(
         replaced.visibility.iter().any(|v| *v < 0.95),
         "the replaced occluder should still cast"

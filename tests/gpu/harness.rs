@@ -388,6 +388,14 @@ fn srgb_to_linear(v: u8) -> f32 {
     }
 }
 
+/// The largest |a − b| over two images.
+pub fn largest_difference(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
 /// Mean and 99th percentile of |gpu − cpu| over the masked pixels.
 pub fn difference_stats(gpu: &[f32], cpu: &[f32], mask: &[bool]) -> (f32, f32) {
     let mut diffs: Vec<f32> = gpu
