@@ -16,7 +16,8 @@
 //!
 //! What runs each frame, per camera (the order lives in [`schedule`]):
 //!
-//! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer; our
+//! 1. Bevy's depth and normal prepass gives the front layer of the ND-buffer (copied into a
+//!    single-sampled, viewport-sized layer first on MSAA and split-screen cameras); our
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
 //! 2. [`ray_march`] (the default) marches a few rays per pixel through both layers at half
 //!    resolution (Bavoil & Sainz 2008), and [`temporal`] accumulates them over frames through
@@ -35,7 +36,9 @@
 //! 5. [`compose`] joins near- and far-field occlusion, counting each occluder once
 //!    ([`FarFieldBlend`]), turns it into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
-//!    environment specular darken; direct lights are untouched.
+//!    environment specular darken; direct lights are untouched. On MSAA cameras, where Bevy makes
+//!    no such texture, and on split-screen viewports, where its texture is too small, compose
+//!    makes one fit.
 //!
 //! # Architecture
 //!

@@ -25,6 +25,9 @@ pub enum DynamicAoUpdate {
 /// The passes of the plugin in the [`Core3d`] schedule, listed in the order they run.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DynamicAoSystems {
+    /// Copies the front layer out of Bevy's prepass where the passes cannot read it as it is
+    /// (MSAA, split-screen viewports).
+    FrontLayer,
     /// Draws the back faces of the scene into the second ND-buffer layer.
     BackFaces,
     /// The view's image-space technique (near-field, horizon-based or ray march).
@@ -61,6 +64,9 @@ pub(crate) enum DynamicAoExtract {
 /// Preparation steps of the plugin that need an order in Bevy's [`Render`] schedule.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) enum DynamicAoPrepare {
+    /// Bevy's SSAO texture made fit for our passes on split-screen and MSAA views, between Bevy
+    /// making it and the bind groups that bind it (see `compose::ssao_slot`).
+    SsaoSlot,
     /// Each technique counts the passes of a view that have not compiled yet.
     Readiness,
     /// Our passes take over Bevy's SSAO texture on views where all have compiled.
@@ -69,6 +75,8 @@ pub(crate) enum DynamicAoPrepare {
     BindGroups,
     /// The bind groups of debug overlays.
     OverlayBindGroups,
+    /// MSAA views get back the SSAO resources held aside while Bevy made its bind groups.
+    RestoreSsao,
 }
 
 /// Pipelines built once, when the renderer starts.
@@ -101,7 +109,7 @@ pub(crate) fn configure(app: &mut App) {
         Core3d,
         // At half resolution the blur runs on the upsampled, full-resolution AO.
         (
-            BackFaces, NearField, Temporal, FarField, Upsample, Filter, Compose,
+            FrontLayer, BackFaces, NearField, Temporal, FarField, Upsample, Filter, Compose,
         )
             .chain()
             // The front layer is Bevy's prepass output.
@@ -150,6 +158,18 @@ pub(crate) fn configure(app: &mut App) {
             .in_set(RenderSystems::PrepareBindGroups),
         // The occupied-voxel overlay and the voxel passes both use the voxel buffers, which the
         // voxel bind groups may recreate: a fixed order instead of whichever the executor picks.
+    );
+    render_app.configure_sets(
+        Render,
+        DynamicAoPrepare::SsaoSlot
+            .after(RenderSystems::PrepareResourcesFlush)
+            .before(RenderSystems::PrepareBindGroups),
+    );
+    render_app.configure_sets(
+        Render,
+        DynamicAoPrepare::RestoreSsao
+            .after(RenderSystems::PrepareBindGroups)
+            .before(RenderSystems::Render),
     );
     render_app.configure_sets(
         RenderStartup,

@@ -5,7 +5,8 @@
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
-//!     [--time SECONDS] [--temporal|--no-temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
+//!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
+//!     [--out-color COLOR.png]
 //! ```
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
@@ -14,7 +15,8 @@
 //! `--frames N` renders N frames with a still camera before the capture (default: 4, or 32
 //! where the occlusion is accumulated, twice its history, so the capture shows it converged). `--timings` then prints one line, `timings: ao_gpu_ms=<mean GPU ms of the AO passes>
 //! frame_gpu_ms=<all passes> frames=<n>`, over the frames rendered once the scene was ready (for
-//! `bevy-ssao` the AO pass is Bevy's own).
+//! `bevy-ssao` the AO pass is Bevy's own). `--msaa 4` renders with 4 samples per pixel (default
+//! 1, off; the AO passes read sample 0 of each pixel).
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
@@ -208,7 +210,7 @@ fn scene_ready(
     let readback = AoReadback::new(&mut images, size);
     commands.entity(camera).insert((
         RenderTarget::Image(target.into()),
-        Msaa::Off,
+        Msaa::from_samples(options.msaa),
         DynamicAo {
             technique: options.technique,
             radius: options.radius,

@@ -11,7 +11,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--timings] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -87,6 +87,8 @@ pub struct Options {
     pub temporal: AoTemporal,
     /// Print the mean GPU time of the AO passes and of all passes after the capture.
     pub timings: bool,
+    /// The camera's MSAA samples per pixel (1 = off).
+    pub msaa: u32,
     pub out_ao: PathBuf,
     pub out_color: Option<PathBuf>,
 }
@@ -116,6 +118,7 @@ impl Options {
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color) = (None, None);
+        let mut msaa = 1;
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
             let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -194,6 +197,17 @@ impl Options {
                             "--time takes a number of seconds ≥ 0, got '{text}'"
                         ))?;
                 }
+                "--msaa" => {
+                    let text = value()?;
+                    msaa = text
+                        .parse::<u32>()
+                        .ok()
+                        .filter(|n| [1, 4].contains(n))
+                        .ok_or(format!(
+                            "--msaa takes 1 or 4 samples (the counts every GPU supports), \
+                             got '{text}'"
+                        ))?;
+                }
                 "--out-ao" => out_ao = Some(PathBuf::from(value()?)),
                 "--out-color" => out_color = Some(PathBuf::from(value()?)),
                 "--help" | "-h" => {
@@ -210,6 +224,11 @@ impl Options {
                     "{flag} is at most {MAX_SIZE} pixels (a GPU texture limit)"
                 ));
             }
+        }
+        if msaa > 1 && technique.is_some_and(|(t, _)| t == AoTechnique::BevySsao) {
+            return Err(
+                "bevy-ssao needs --msaa 1: Bevy's SSAO does not run on MSAA cameras".into(),
+            );
         }
         let scene = scene.ok_or_else(|| missing("--scene"))?;
         if !scene.is_file() {
@@ -234,6 +253,7 @@ impl Options {
                 .ok_or_else(|| missing("--technique"))?,
             default_technique,
             timings,
+            msaa,
             temporal: temporal.unwrap_or(preset.temporal()),
             far: technique.and_then(|(_, far)| far),
             far_blend,

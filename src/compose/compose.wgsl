@@ -17,7 +17,7 @@
 // independent occluder. `Add` adds the near and far terms and clamps
 // (Shanmugam & Arikan 2007, §6); `Max` takes the larger.
 
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel}
 
 @group(0) @binding(0) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
@@ -49,7 +49,7 @@ fn sphere_union(occlusion: vec2<f32>, articulated_open: f32, largest: f32) -> ve
 
 @compute @workgroup_size(8, 8, 1)
 fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
-    let dims = textureDimensions(visibility);
+    let dims = textureDimensions(near_occlusion);
     if id.x >= dims.x || id.y >= dims.y {
         return;
     }
@@ -86,5 +86,6 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(visibility, pixel, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
+    let at = visibility_pixel(settings, pixel, textureDimensions(visibility), dims);
+    textureStore(visibility, at, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
 }

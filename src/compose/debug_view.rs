@@ -12,6 +12,7 @@ use bevy::render::{
 use bevy::shader::Shader;
 use bevy::utils::default;
 
+use super::{ParkedSsao, visibility_texture};
 use crate::view::DynamicAoView;
 
 #[derive(Resource)]
@@ -89,13 +90,24 @@ pub(crate) fn prepare_debug_view_bind_groups(
     render_device: Res<RenderDevice>,
     pipeline: Res<DebugViewPipeline>,
     pipeline_cache: Res<PipelineCache>,
-    views: Query<(Entity, &ScreenSpaceAmbientOcclusionResources), With<DebugViewPipelineId>>,
+    views: Query<
+        (
+            Entity,
+            Option<&ScreenSpaceAmbientOcclusionResources>,
+            Option<&ParkedSsao>,
+        ),
+        With<DebugViewPipelineId>,
+    >,
 ) {
-    for (entity, ssao) in &views {
+    for (entity, resources, parked) in &views {
+        let Some(visibility) = visibility_texture(resources, parked) else {
+            commands.entity(entity).remove::<DebugViewBindGroup>();
+            continue;
+        };
         let bind_group = render_device.create_bind_group(
             "dynamic_ao_debug_view_bind_group",
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
-            &BindGroupEntries::single(&ssao.screen_space_ambient_occlusion_texture.default_view),
+            &BindGroupEntries::single(&visibility.default_view),
         );
         commands
             .entity(entity)

@@ -15,19 +15,22 @@ mod debug_view;
 mod failed;
 mod node;
 mod pipeline;
+mod ssao_slot;
+
+pub(crate) use ssao_slot::{ParkedSsao, visibility_texture};
 
 use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
 use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::prelude::*;
-use bevy::pbr::SsaoPipelineId;
+use bevy::pbr::{SsaoPipelineId, prepare_mesh_view_bind_groups};
 use bevy::render::{
-    GpuResourceAppExt, Render, RenderSystems,
+    ExtractSchedule, GpuResourceAppExt, Render, RenderSystems,
     render_resource::{PipelineCache, SpecializedRenderPipelines},
 };
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 use crate::view::PendingPasses;
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
@@ -48,8 +51,26 @@ impl Plugin for ComposePlugin {
             .init_gpu_resource::<debug_view::DebugViewPipeline>()
             .init_gpu_resource::<SpecializedRenderPipelines<debug_view::DebugViewPipeline>>()
             .add_systems(
+                ExtractSchedule,
+                ssao_slot::extract_msaa_slots.in_set(DynamicAoExtract::Views),
+            )
+            .add_systems(
                 Render,
                 (
+                    (
+                        ssao_slot::place_split_screen_textures,
+                        ssao_slot::park_msaa_resources,
+                    )
+                        .chain()
+                        .in_set(DynamicAoPrepare::SsaoSlot),
+                    (
+                        ssao_slot::restore_msaa_resources,
+                        // A second run, now with the texture: the first one, during
+                        // `PrepareBindGroups`, saw the views without it.
+                        prepare_mesh_view_bind_groups.run_if(ssao_slot::any_msaa_slot),
+                    )
+                        .chain()
+                        .in_set(DynamicAoPrepare::RestoreSsao),
                     debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
                     hand_over_from_bevy_ssao.in_set(DynamicAoPrepare::HandOver),
                     failed::report_failed_pipelines.in_set(DynamicAoPrepare::HandOver),

@@ -51,11 +51,16 @@ pub(crate) fn compose_pass(
 }
 
 pub(crate) fn debug_view_pass(
-    view: ViewQuery<(&ViewTarget, &DebugViewPipelineId, &DebugViewBindGroup)>,
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &ViewTarget,
+        &DebugViewPipelineId,
+        &DebugViewBindGroup,
+    )>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (target, pipeline_id, bind_group) = view.into_inner();
+    let (camera, target, pipeline_id, bind_group) = view.into_inner();
     let Some(pipeline) = pipeline_cache.get_render_pipeline(pipeline_id.0) else {
         return;
     };
@@ -70,6 +75,9 @@ pub(crate) fn debug_view_pass(
         multiview_mask: None,
     });
     let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_debug_view");
+    if let Some(viewport) = camera.viewport.as_ref() {
+        pass.set_camera_viewport(viewport);
+    }
     pass.set_render_pipeline(pipeline);
     pass.set_bind_group(0, &bind_group.0, &[]);
     pass.draw(0..3, 0..1);

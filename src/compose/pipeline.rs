@@ -13,6 +13,7 @@ use bevy::render::{
 };
 use bevy::utils::default;
 
+use super::{ParkedSsao, visibility_texture};
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
 
 #[derive(Resource)]
@@ -83,7 +84,8 @@ pub(crate) fn prepare_compose_bind_groups(
             Entity,
             &DynamicAoTextures,
             &FarFieldOutputs,
-            &ScreenSpaceAmbientOcclusionResources,
+            Option<&ScreenSpaceAmbientOcclusionResources>,
+            Option<&ParkedSsao>,
         ),
         With<DynamicAoView>,
     >,
@@ -91,7 +93,11 @@ pub(crate) fn prepare_compose_bind_groups(
     let Some(settings_binding) = settings.binding() else {
         return;
     };
-    for (entity, textures, outputs, ssao) in &views {
+    for (entity, textures, outputs, resources, parked) in &views {
+        let Some(visibility) = visibility_texture(resources, parked) else {
+            commands.entity(entity).remove::<ComposeBindGroup>();
+            continue;
+        };
         // Compose reads a term's binding only while the term takes part; otherwise any float
         // texture of the view fits.
         let far = |term| {
@@ -109,7 +115,7 @@ pub(crate) fn prepare_compose_bind_groups(
                 far(FarTerm::Spheres),
                 far(FarTerm::Fields),
                 far(FarTerm::Voxels),
-                &ssao.screen_space_ambient_occlusion_texture.default_view,
+                &visibility.default_view,
             )),
         );
         commands.entity(entity).insert(ComposeBindGroup(bind_group));

@@ -1,7 +1,7 @@
 //! The box pipelines of the AO field pass and their per-view bind groups.
 
+use crate::nd_buffer::FrontLayer;
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -113,12 +113,7 @@ pub(crate) fn prepare_field_bind_groups(
     pipeline_cache: Res<PipelineCache>,
     bindings: ViewBindings,
     buffers: Res<FieldBuffers>,
-    views: Query<(
-        Entity,
-        &DynamicAoView,
-        &DynamicAoTextures,
-        &ViewPrepassTextures,
-    )>,
+    views: Query<(Entity, &DynamicAoView, &DynamicAoTextures, FrontLayer)>,
 ) {
     let (Some((view_binding, settings_binding)), Some(instances), Some(cells)) = (
         bindings.get(),
@@ -128,11 +123,9 @@ pub(crate) fn prepare_field_bind_groups(
         return;
     };
     for (entity, view, textures, prepass) in &views {
-        let (true, Some(depth), Some(normal)) = (
-            view.has(FarTerm::Fields),
-            prepass.depth_view(),
-            prepass.normal_view(),
-        ) else {
+        let (true, Some(depth), Some(normal)) =
+            (view.has(FarTerm::Fields), prepass.depth(), prepass.normal())
+        else {
             commands.entity(entity).remove::<FieldBindGroup>();
             continue;
         };

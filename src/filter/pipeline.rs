@@ -1,7 +1,7 @@
 //! Pipelines and bind groups of the blur.
 
+use crate::nd_buffer::FrontLayer;
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -204,18 +204,13 @@ pub(crate) fn prepare_blur_bind_groups(
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
     bindings: ViewBindings,
-    views: Query<(
-        Entity,
-        &DynamicAoTextures,
-        &ViewPrepassTextures,
-        &DynamicAoView,
-    )>,
+    views: Query<(Entity, &DynamicAoTextures, FrontLayer, &DynamicAoView)>,
 ) {
     let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, textures, prepass, view) in &views {
-        let Some(depth) = prepass.depth_view() else {
+        let Some(depth) = prepass.depth() else {
             commands
                 .entity(entity)
                 .remove::<(UpsampleBindGroup, BlurBindGroups)>();
@@ -227,7 +222,7 @@ pub(crate) fn prepare_blur_bind_groups(
             depth,
         };
         let occlusion = &textures.full_occlusion.default_view;
-        match prepass.normal_view().filter(|_| view.half_resolution) {
+        match prepass.normal().filter(|_| view.half_resolution) {
             Some(normal) => {
                 commands.entity(entity).insert(UpsampleBindGroup(
                     pipelines.one.upsample_bind_group(

@@ -1,7 +1,7 @@
 //! One compute pipeline per image-space technique over one layout, and the bind group of each
 //! view.
 
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -95,14 +95,13 @@ pub(super) fn prepare_image_space_bind_groups(
     pipelines: Res<ImageSpacePipelines>,
     pipeline_cache: Res<PipelineCache>,
     bindings: ViewBindings,
-    views: Query<(Entity, &DynamicAoTextures, &ViewPrepassTextures), With<DynamicAoView>>,
+    views: Query<(Entity, &DynamicAoTextures, FrontLayer), With<DynamicAoView>>,
 ) {
     let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
     for (entity, textures, prepass) in &views {
-        let (Some(front_depth), Some(front_normal)) = (prepass.depth_view(), prepass.normal_view())
-        else {
+        let (Some(front_depth), Some(front_normal)) = (prepass.depth(), prepass.normal()) else {
             continue;
         };
         let bind_group = render_device.create_bind_group(

@@ -1,11 +1,14 @@
 //! The two-layer ND-buffer (normals + depth) of Shanmugam & Arikan 2007, §4.2.
 //!
-//! The front layer is Bevy's own depth and normal prepass. This module draws the second layer:
+//! The front layer is Bevy's own depth and normal prepass, which `front_layer.rs` copies first where
+//! the passes cannot read it as it is (MSAA, split-screen viewports). This module draws the
+//! second layer:
 //! the nearest back faces, through a mesh phase of our own that reuses Bevy's mesh pipeline, so
 //! skinned and morph-target meshes deform exactly as in the front layer. Both layers use the
 //! same encoding: reverse-Z `Depth32Float` depth and world-space normals stored as `n*0.5+0.5` in
 //! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`.
 
+mod front_layer;
 mod node;
 mod phase;
 mod pipeline;
@@ -18,11 +21,12 @@ use bevy::pbr::MeshPipeline;
 use bevy::render::{
     ExtractSchedule, Render, RenderDebugFlags, RenderStartup, RenderSystems,
     render_phase::{AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system},
-    render_resource::SpecializedMeshPipelines,
+    render_resource::{SpecializedMeshPipelines, SpecializedRenderPipelines},
 };
 
 use crate::capabilities;
-use crate::schedule::{DynamicAoStartup, DynamicAoSystems};
+use crate::schedule::{DynamicAoPrepare, DynamicAoStartup, DynamicAoSystems};
+pub(crate) use front_layer::{FrontLayer, FrontLayerViews};
 pub use phase::BackFace3d;
 
 /// Registers the back-face phase, its pipeline and its pass.
@@ -31,6 +35,7 @@ pub struct NdBufferPlugin;
 impl Plugin for NdBufferPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "back_faces.wgsl");
+        embedded_asset!(app, "front_layer.wgsl");
         app.add_plugins(SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(
             RenderDebugFlags::default(),
         ));
@@ -43,10 +48,14 @@ impl Plugin for NdBufferPlugin {
         render_app
             .init_resource::<SpecializedMeshPipelines<pipeline::BackFacePipeline>>()
             .init_resource::<DrawFunctions<BackFace3d>>()
+            .init_resource::<SpecializedRenderPipelines<front_layer::FrontLayerCopyPipeline>>()
             .add_render_command::<BackFace3d, phase::DrawBackFaces>()
             .add_systems(
                 RenderStartup,
-                pipeline::init_back_face_pipeline.in_set(DynamicAoStartup::MeshPipelines),
+                (
+                    pipeline::init_back_face_pipeline.in_set(DynamicAoStartup::MeshPipelines),
+                    front_layer::init_front_layer_copy_pipeline,
+                ),
             )
             .add_systems(ExtractSchedule, phase::extract_back_face_phases)
             .add_systems(
@@ -54,11 +63,18 @@ impl Plugin for NdBufferPlugin {
                 (
                     pipeline::queue_back_faces.in_set(RenderSystems::QueueMeshes),
                     sort_phase_system::<BackFace3d>.in_set(RenderSystems::PhaseSort),
+                    front_layer::prepare_front_layer_copies.in_set(RenderSystems::PrepareResources),
+                    front_layer::wait_for_front_layer_copy.in_set(DynamicAoPrepare::Readiness),
+                    front_layer::prepare_front_layer_copy_bind_groups
+                        .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(
                 Core3d,
-                node::back_face_pass.in_set(DynamicAoSystems::BackFaces),
+                (
+                    front_layer::front_layer_copy_pass.in_set(DynamicAoSystems::FrontLayer),
+                    node::back_face_pass.in_set(DynamicAoSystems::BackFaces),
+                ),
             );
     }
 }

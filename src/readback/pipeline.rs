@@ -1,15 +1,16 @@
 //! The pipeline and bind groups of the read-back copy.
 
+use crate::nd_buffer::FrontLayer;
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::log::warn_once;
 use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
 use bevy::render::{
     camera::ExtractedCamera,
+    extract_component::ComponentUniforms,
     render_asset::RenderAssets,
     render_resource::{
-        binding_types::{texture_2d, texture_depth_2d, texture_storage_2d},
+        binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
     renderer::RenderDevice,
@@ -18,7 +19,8 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::AoReadback;
-use crate::view::DynamicAoTextures;
+use crate::compose::{ParkedSsao, visibility_texture};
+use crate::view::{DynamicAoTextures, DynamicAoUniform};
 
 #[derive(Resource)]
 pub(crate) struct ReadbackPipeline {
@@ -42,6 +44,7 @@ impl FromWorld for ReadbackPipeline {
                     texture_storage_2d(TextureFormat::R32Float, StorageTextureAccess::WriteOnly),
                     texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
                     texture_storage_2d(TextureFormat::Rgba32Float, StorageTextureAccess::WriteOnly),
+                    uniform_buffer::<DynamicAoUniform>(true),
                 ),
             ),
         );
@@ -71,12 +74,22 @@ pub(crate) fn prepare_readback_bind_groups(
         Entity,
         &AoReadback,
         &DynamicAoTextures,
-        &ViewPrepassTextures,
-        &ScreenSpaceAmbientOcclusionResources,
+        FrontLayer,
+        (
+            Option<&ScreenSpaceAmbientOcclusionResources>,
+            Option<&ParkedSsao>,
+        ),
         &ExtractedCamera,
     )>,
+    settings: Res<ComponentUniforms<DynamicAoUniform>>,
 ) {
-    for (entity, readback, textures, prepass, ssao, camera) in &views {
+    let Some(settings) = settings.binding() else {
+        return;
+    };
+    for (entity, readback, textures, prepass, (resources, parked), camera) in &views {
+        let Some(ssao) = visibility_texture(resources, parked) else {
+            continue;
+        };
         let (Some(visibility), Some(front), Some(back)) = (
             images.get(&readback.visibility),
             images.get(&readback.front),
@@ -85,8 +98,8 @@ pub(crate) fn prepare_readback_bind_groups(
             continue;
         };
         let (Some(depth), Some(normal), Some(size)) = (
-            prepass.depth_view(),
-            prepass.normal_view(),
+            prepass.depth(),
+            prepass.normal(),
             camera.physical_viewport_size,
         ) else {
             continue;
@@ -102,7 +115,7 @@ pub(crate) fn prepare_readback_bind_groups(
             "dynamic_ao_readback_bind_group",
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
             &BindGroupEntries::sequential((
-                &ssao.screen_space_ambient_occlusion_texture.default_view,
+                &ssao.default_view,
                 depth,
                 normal,
                 &textures.back_depth.default_view,
@@ -110,6 +123,7 @@ pub(crate) fn prepare_readback_bind_groups(
                 &visibility.texture_view,
                 &front.texture_view,
                 &back.texture_view,
+                settings.clone(),
             )),
         );
         commands

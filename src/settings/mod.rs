@@ -31,8 +31,10 @@ pub const DEFAULT_INTENSITY: f32 = 1.0;
 /// lighting applies it to ambient and indirect light only). Bevy's own SSAO pass is switched off
 /// on that camera unless [`AoTechnique::BevySsao`] is chosen.
 ///
-/// The camera must use `Msaa::Off`; on an MSAA camera the plugin logs a warning and renders
-/// without AO.
+/// MSAA cameras get AO from every technique but [`AoTechnique::BevySsao`] (which Bevy runs
+/// only on `Msaa::Off` cameras; with MSAA on it logs a warning and the camera renders without
+/// AO): the passes read sample 0 of each pixel of the multisampled prepass. Cameras with a
+/// viewport (split screen) and cameras rendering to an image work as any other.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
 #[reflect(Component, Default, Clone, Debug, PartialEq)]
 #[require(ScreenSpaceAmbientOcclusion)]
@@ -164,6 +166,11 @@ impl DynamicAo {
     pub fn with_radius(mut self, radius: f32) -> Self {
         self.radius = radius;
         self
+    }
+
+    /// Whether these settings give AO on an MSAA camera: every technique but Bevy's SSAO does.
+    pub fn works_with_msaa(&self) -> bool {
+        self.technique != AoTechnique::BevySsao
     }
 
     /// The radius actually used: non-finite or non-positive values fall back to the default.

@@ -52,4 +52,21 @@ struct DynamicAoUniform {
     temporal_frames: f32,
     // Blur half-width of the voxel term, pixels (0 = off): not halved under accumulation.
     voxel_blur_radius: u32,
+    // Where the camera's viewport starts in its render target, pixels.
+    viewport_origin: vec2<u32>,
+}
+
+// The texel of the visibility texture (of size `texture_size`) that holds `pixel` of a viewport
+// of `viewport_size`: the same texel where the texture has the viewport's size, the pixel at the
+// viewport's place where it has the render target's (split screen, see `compose::ssao_slot`).
+fn visibility_pixel(
+    settings: DynamicAoUniform,
+    pixel: vec2<i32>,
+    texture_size: vec2<u32>,
+    viewport_size: vec2<u32>,
+) -> vec2<i32> {
+    if all(texture_size == viewport_size) {
+        return pixel;
+    }
+    return pixel + vec2<i32>(settings.viewport_origin);
 }

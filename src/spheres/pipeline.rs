@@ -1,7 +1,7 @@
 //! The splat pass's billboard pipeline and its per-view bind groups.
 
+use crate::nd_buffer::FrontLayer;
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -96,12 +96,7 @@ pub(crate) fn prepare_splat_bind_groups(
     pipeline_cache: Res<PipelineCache>,
     bindings: ViewBindings,
     spheres: Res<SphereBuffer>,
-    views: Query<(
-        Entity,
-        &DynamicAoView,
-        &DynamicAoTextures,
-        &ViewPrepassTextures,
-    )>,
+    views: Query<(Entity, &DynamicAoView, &DynamicAoTextures, FrontLayer)>,
 ) {
     let (Some((view_binding, settings_binding)), Some(sphere_binding)) =
         (bindings.get(), spheres.buffer.binding())
@@ -111,8 +106,8 @@ pub(crate) fn prepare_splat_bind_groups(
     for (entity, view, textures, prepass) in &views {
         let (true, Some(depth), Some(normal)) = (
             view.has(FarTerm::Spheres),
-            prepass.depth_view(),
-            prepass.normal_view(),
+            prepass.depth(),
+            prepass.normal(),
         ) else {
             commands.entity(entity).remove::<SplatBindGroup>();
             continue;

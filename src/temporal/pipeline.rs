@@ -2,7 +2,6 @@
 //! term) and the bind group of one accumulation.
 
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -16,6 +15,7 @@ use bevy::utils::default;
 
 use super::view::{TemporalHistory, TemporalUniform};
 use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::nd_buffer::{FrontLayer, FrontLayerViews};
 use crate::view::{DynamicAoTextures, OCCLUSION_FORMAT};
 
 /// One accumulation pipeline and its layout.
@@ -113,12 +113,11 @@ pub(crate) struct AccumulationTextures<'a> {
     pub current: &'a TextureView,
     /// The accumulated value the next passes read.
     pub output: &'a TextureView,
-    pub prepass: &'a ViewPrepassTextures,
+    pub front: FrontLayerViews<'a>,
 }
 
 impl TemporalPipeline {
-    /// The bind group of one accumulation, or `None` while the prepass lacks depth or normals or
-    /// the uniforms are not written yet.
+    /// The bind group of one accumulation, or `None` while the uniforms are not written yet.
     pub fn bind_group(
         &self,
         device: &RenderDevice,
@@ -128,18 +127,15 @@ impl TemporalPipeline {
         history: &TemporalHistory,
         textures: AccumulationTextures,
     ) -> Option<BindGroup> {
-        let prepass = textures.prepass;
-        let (Some(view), Some(depth), Some(normal), Some(temporal)) = (
-            view_uniforms.uniforms.binding(),
-            prepass.depth_view(),
-            prepass.normal_view(),
-            history.uniform.binding(),
-        ) else {
+        let front = textures.front;
+        let (Some(view), Some(temporal)) =
+            (view_uniforms.uniforms.binding(), history.uniform.binding())
+        else {
             return None;
         };
         // Without motion vectors the history is dropped (see `TemporalHistory::advance`), so any
         // float texture stands in for them.
-        let motion = prepass.motion_vectors_view().unwrap_or(textures.current);
+        let motion = front.motion_vectors.unwrap_or(textures.current);
         let (read, write) = history.views();
         Some(device.create_bind_group(
             "dynamic_ao_temporal_bind_group",
@@ -148,8 +144,8 @@ impl TemporalPipeline {
                 view,
                 temporal,
                 textures.current,
-                depth,
-                normal,
+                front.depth,
+                front.normal,
                 motion,
                 read,
                 write,
@@ -169,28 +165,28 @@ pub(crate) fn prepare_temporal_bind_groups(
     pipeline: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
     view_uniforms: Res<ViewUniforms>,
-    views: Query<(
-        Entity,
-        &DynamicAoTextures,
-        &ViewPrepassTextures,
-        &TemporalHistory,
-    )>,
+    views: Query<(Entity, &DynamicAoTextures, FrontLayer, &TemporalHistory)>,
 ) {
     for (entity, textures, prepass, history) in &views {
-        let bind_group = textures.raw_occlusion.as_ref().and_then(|raw| {
-            pipeline.bind_group(
-                &render_device,
-                &pipeline_cache,
-                &view_uniforms,
-                Channels::One,
-                history,
-                AccumulationTextures {
-                    current: &raw.default_view,
-                    output: &textures.near_occlusion.default_view,
-                    prepass,
-                },
-            )
-        });
+        let front = prepass.views();
+        let bind_group = textures
+            .raw_occlusion
+            .as_ref()
+            .zip(front)
+            .and_then(|(raw, front)| {
+                pipeline.bind_group(
+                    &render_device,
+                    &pipeline_cache,
+                    &view_uniforms,
+                    Channels::One,
+                    history,
+                    AccumulationTextures {
+                        current: &raw.default_view,
+                        output: &textures.near_occlusion.default_view,
+                        front,
+                    },
+                )
+            });
         match bind_group {
             Some(bind_group) => commands
                 .entity(entity)

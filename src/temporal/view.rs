@@ -2,7 +2,7 @@
 //! frame, and whether the history is dropped (whether the pass has compiled is counted in
 //! `node.rs`).
 
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::image::ToExtents;
 use bevy::math::UVec2;
@@ -49,8 +49,8 @@ pub(crate) struct HistoryFrame<'a> {
     pub scale: u32,
     /// The camera's settings this frame.
     pub settings: &'a DynamicAo,
-    /// The view's prepass: without motion vectors the history is dropped.
-    pub prepass: Option<&'a ViewPrepassTextures>,
+    /// Whether the view has motion vectors: without them the history is dropped.
+    pub motion_vectors: bool,
 }
 
 impl TemporalHistory {
@@ -69,11 +69,7 @@ impl TemporalHistory {
         frame: HistoryFrame,
     ) -> Option<TemporalHistory> {
         let key = history_key(frame.settings);
-        let motion = frame
-            .prepass
-            .and_then(|p| p.motion_vectors_view())
-            .is_some();
-        let reset = frame.settings.temporal.reset || !motion;
+        let reset = frame.settings.temporal.reset || !frame.motion_vectors;
         let uniform = |reset: bool| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
@@ -138,7 +134,7 @@ pub(crate) fn prepare_history(
         Entity,
         &DynamicAoView,
         Option<&DynamicAoTextures>,
-        Option<&ViewPrepassTextures>,
+        Option<FrontLayer>,
         Option<&mut TemporalHistory>,
     )>,
     // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
@@ -159,7 +155,7 @@ pub(crate) fn prepare_history(
             size: UVec2::new(size.width, size.height),
             scale: if view.half_resolution { 2 } else { 1 },
             settings: &view.settings,
-            prepass,
+            motion_vectors: prepass.is_some_and(|p| p.motion_vectors().is_some()),
         };
         let history = history.map(Mut::into_inner);
         if let Some(new) = TemporalHistory::advance(history, &device, &queue, frame) {

@@ -68,7 +68,7 @@ pub(super) fn check_cameras(
             }
         }
     }
-    for (entity, _, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
+    for (entity, ao, mut camera, msaa, has_ssao, suspended, name) in &mut cameras {
         let empty_viewport = camera
             .viewport
             .as_ref()
@@ -82,7 +82,10 @@ pub(super) fn check_cameras(
                 .entity(entity)
                 .remove::<SuspendedForEmptyViewport>();
         }
-        let problem = if *msaa != Msaa::Off {
+        // Bevy's SSAO extraction logs an error for every MSAA camera carrying its component, so
+        // none of them does: compose gives the render-world view the component instead.
+        let msaa_on = *msaa != Msaa::Off;
+        let problem = if msaa_on && !ao.works_with_msaa() {
             Some(Unsupported::Msaa)
         } else if empty_viewport {
             Some(Unsupported::EmptyViewport)
@@ -95,8 +98,9 @@ pub(super) fn check_cameras(
                     let label = label(entity, name);
                     match problem {
                         Unsupported::Msaa => warn!(
-                            "DynamicAo on camera {label} needs Msaa::Off (it is {msaa:?}); \
-                             rendering this camera without ambient occlusion"
+                            "AoTechnique::BevySsao on camera {label} needs Msaa::Off (it is \
+                             {msaa:?}); rendering this camera without ambient occlusion (every \
+                             other technique works with MSAA)"
                         ),
                         Unsupported::EmptyViewport => warn!(
                             "camera {label} has a zero-size viewport, which Bevy's renderer \
@@ -105,6 +109,14 @@ pub(super) fn check_cameras(
                         ),
                     }
                 }
+                if has_ssao {
+                    commands
+                        .entity(entity)
+                        .remove::<ScreenSpaceAmbientOcclusion>();
+                }
+            }
+            None if msaa_on => {
+                warned.retain(|(e, _)| *e != entity);
                 if has_ssao {
                     commands
                         .entity(entity)

@@ -4,6 +4,7 @@
 use bevy::camera::{Camera, Camera3d};
 use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
+use bevy::math::UVec2;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::render::{Extract, render_resource::ShaderType, sync_world::RenderEntity, view::Msaa};
 
@@ -70,6 +71,8 @@ pub(crate) struct DynamicAoUniform {
     /// voxel term's error is mostly the grid's steps, which frames do not average away (halved,
     /// its error against ground truth rose from 0.024 to 0.029 on room corner at R = 2 m).
     pub voxel_blur_radius: u32,
+    /// Where the camera's viewport starts in its render target, pixels.
+    pub viewport_origin: UVec2,
 }
 
 /// The render-world components a view has while it runs the plugin; each technique drops its
@@ -107,7 +110,10 @@ pub(super) fn extract_views(
     }
     for (entity, camera, ao, msaa, has_ssao) in &cameras {
         let mut entity_commands = commands.entity(entity);
-        if !camera.is_active || *msaa != Msaa::Off || !has_ssao {
+        // An MSAA camera has no Bevy SSAO component in the main world; compose gives its view
+        // one (see `compose::ssao_slot`).
+        let msaa_served = *msaa != Msaa::Off && ao.works_with_msaa();
+        if !camera.is_active || !(has_ssao || msaa_served) {
             entity_commands.remove::<ViewState>();
             continue;
         }
@@ -195,6 +201,10 @@ pub(super) fn extract_views(
                     1.0
                 },
                 voxel_blur_radius,
+                viewport_origin: camera
+                    .viewport
+                    .as_ref()
+                    .map_or(UVec2::ZERO, |viewport| viewport.physical_position),
             },
         ));
     }

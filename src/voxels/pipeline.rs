@@ -1,7 +1,7 @@
 //! The pipelines of the voxelization and sampling passes and their per-view bind groups.
 
+use crate::nd_buffer::{FrontLayer, FrontLayerViews};
 use bevy::asset::load_embedded_asset;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     render_resource::{
@@ -112,7 +112,7 @@ pub(crate) fn prepare_voxel_bind_groups(
         &DynamicAoTextures,
         (Option<&VoxelTextures>, Option<&VoxelHistory>),
         &FarFieldOutputs,
-        &ViewPrepassTextures,
+        FrontLayer,
     )>,
     temporal: (Res<TemporalPipeline>, Res<ViewUniforms>),
 ) {
@@ -144,8 +144,8 @@ pub(crate) fn prepare_voxel_bind_groups(
             view.has(FarTerm::Voxels),
             voxel_textures,
             outputs.get(FarTerm::Voxels),
-            prepass.depth_view(),
-            prepass.normal_view(),
+            prepass.depth(),
+            prepass.normal(),
         ) else {
             commands.entity(entity).remove::<VoxelBindGroups>();
             continue;
@@ -178,7 +178,11 @@ pub(crate) fn prepare_voxel_bind_groups(
                         AccumulationTextures {
                             current: &voxel_textures.low.default_view,
                             output: &accumulated.default_view,
-                            prepass,
+                            front: FrontLayerViews {
+                                depth,
+                                normal,
+                                motion_vectors: prepass.motion_vectors(),
+                            },
                         },
                     )
                 });

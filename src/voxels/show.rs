@@ -1,10 +1,11 @@
 //! The occupied-voxel debug view: a full-screen pass over the lit image.
 
+use crate::nd_buffer::FrontLayer;
 use bevy::asset::{Handle, load_embedded_asset};
 use bevy::core_pipeline::FullscreenShader;
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::ecs::prelude::*;
 use bevy::render::{
+    camera::ExtractedCamera,
     render_resource::{
         binding_types::{storage_buffer_read_only_sized, texture_depth_2d, uniform_buffer},
         *,
@@ -87,14 +88,14 @@ pub(crate) fn prepare_show_voxels(
     mut pipelines: ResMut<SpecializedRenderPipelines<ShowVoxelsPipeline>>,
     buffers: Res<VoxelBuffers>,
     view_uniforms: Res<ViewUniforms>,
-    views: Query<(Entity, &DynamicAoView, &ViewTarget, &ViewPrepassTextures)>,
+    views: Query<(Entity, &DynamicAoView, &ViewTarget, FrontLayer)>,
 ) {
     let shown = buffers.any_shown();
     for (entity, view, target, prepass) in &views {
         let (true, true, Some(depth), Some(view_binding), Some((volumes, grid, params))) = (
             shown,
             view.has(FarTerm::Voxels),
-            prepass.depth_view(),
+            prepass.depth(),
             view_uniforms.uniforms.binding(),
             buffers.bindings(),
         ) else {
@@ -115,11 +116,16 @@ pub(crate) fn prepare_show_voxels(
 }
 
 pub(crate) fn show_voxels_pass(
-    view: ViewQuery<(&ViewTarget, &ShowVoxels, &ViewUniformOffset)>,
+    view: ViewQuery<(
+        &ExtractedCamera,
+        &ViewTarget,
+        &ShowVoxels,
+        &ViewUniformOffset,
+    )>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (target, show, view_offset) = view.into_inner();
+    let (camera, target, show, view_offset) = view.into_inner();
     let Some(pipeline) = pipeline_cache.get_render_pipeline(show.pipeline) else {
         return;
     };
@@ -131,6 +137,9 @@ pub(crate) fn show_voxels_pass(
         occlusion_query_set: None,
         multiview_mask: None,
     });
+    if let Some(viewport) = camera.viewport.as_ref() {
+        pass.set_camera_viewport(viewport);
+    }
     pass.set_render_pipeline(pipeline);
     pass.set_bind_group(0, &show.bind_group, &[view_offset.offset]);
     pass.draw(0..3, 0..1);

@@ -66,7 +66,8 @@ fn first_occupied(volume: VoxelVolume, start: vec3<f32>, d: vec3<f32>) -> vec2<f
 
 @fragment
 fn fragment(in: FullscreenVertexOutput) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(in.position.xy);
+    // The pass covers the viewport; the front layer starts at the viewport's first pixel.
+    let pixel = vec2<i32>(in.position.xy - view.viewport.xy);
     let size = vec2<f32>(textureDimensions(depth_texture));
     let depth = textureLoad(depth_texture, pixel, 0);
     let near = world_position(view, pixel, size, 1.0);

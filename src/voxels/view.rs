@@ -1,7 +1,7 @@
 //! The per-view state of voxel volumes: whether any exist and their occlusion buffers (whether
 //! their passes have compiled is counted in `node.rs`).
 
-use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     Extract,
@@ -65,7 +65,7 @@ pub(crate) fn prepare_voxel_textures(
         &ExtractedCamera,
         &DynamicAoView,
         &mut FarFieldOutputs,
-        Option<&ViewPrepassTextures>,
+        Option<FrontLayer>,
         Option<&mut VoxelHistory>,
     )>,
     // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
@@ -103,7 +103,9 @@ pub(crate) fn prepare_voxel_textures(
                 size: half_size(size),
                 scale: 2,
                 settings: &view.settings,
-                prepass,
+                motion_vectors: prepass
+                    .as_ref()
+                    .is_some_and(|p| p.motion_vectors().is_some()),
             };
             let history = history.map(|h| &mut h.into_inner().0);
             if let Some(new) = TemporalHistory::advance(history, &render_device, &queue, frame) {

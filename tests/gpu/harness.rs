@@ -345,10 +345,15 @@ impl Gpu {
 
     /// The lit image after `frames` more frames, as linear RGB.
     pub fn color(&mut self, frames: u32) -> Vec<Vec3> {
+        let target = self.target();
+        self.color_of(target, UVec2::new(WIDTH, HEIGHT), frames)
+    }
+
+    /// The lit image of any render target of `size` after `frames` more frames, as linear RGB.
+    pub fn color_of(&mut self, target: Handle<Image>, size: UVec2, frames: u32) -> Vec<Vec3> {
         self.update(frames);
         let slot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
         let store = slot.clone();
-        let target = self.target();
         self.app
             .world_mut()
             .spawn(Screenshot::image(target))
@@ -367,7 +372,7 @@ impl Gpu {
             .take()
             .expect("the screenshot did not arrive in 60 frames");
         data.chunks_exact(4)
-            .take((WIDTH * HEIGHT) as usize)
+            .take((size.x * size.y) as usize)
             .map(|p| {
                 Vec3::new(
                     srgb_to_linear(p[0]),

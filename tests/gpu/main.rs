@@ -16,6 +16,7 @@ mod toasters;
 mod ao_capture;
 mod back_layer;
 mod bad_input;
+mod camera_setups;
 mod cameras;
 mod examples;
 mod far_field;

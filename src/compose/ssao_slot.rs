@@ -1,0 +1,174 @@
+//! The texture Bevy's PBR shader reads the ambient occlusion from, on cameras where Bevy's own
+//! SSAO would not provide a usable one.
+//!
+//! PBR reads visibility from `ScreenSpaceAmbientOcclusionResources` (mesh view binding 17), which
+//! Bevy makes for views carrying `ScreenSpaceAmbientOcclusion`. Two camera setups need more:
+//!
+//! - **MSAA.** Bevy's SSAO refuses MSAA cameras (its extraction logs an error and skips them),
+//!   and its bind groups would bind the multisampled prepass where single-sampled textures are
+//!   expected, which wgpu rejects. The main world therefore keeps the component off an MSAA
+//!   camera, and the render world gets it here instead, once our passes have compiled (so PBR
+//!   never reads a texture nobody wrote). While Bevy makes its bind groups, the view's resources
+//!   are parked in [`ParkedSsao`], so Bevy's SSAO skips the view, and are put back afterwards;
+//!   the mesh view bind groups are then made again so that they include the texture.
+//! - **Split screen.** PBR reads the texture at framebuffer pixels, but Bevy sizes it to the
+//!   viewport, so a viewport that does not start at the target's corner reads outside it. On
+//!   such a view the texture is replaced by one the size of the target, and compose writes at
+//!   the viewport's place in it.
+
+use bevy::camera::{Camera, Camera3d};
+use bevy::ecs::prelude::*;
+use bevy::math::UVec2;
+use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionResources};
+use bevy::platform::collections::HashMap;
+use bevy::render::{
+    Extract,
+    camera::ExtractedCamera,
+    render_resource::TextureUsages,
+    renderer::{RenderAdapter, RenderDevice},
+    sync_world::RenderEntity,
+    texture::{CachedTexture, TextureCache},
+    view::Msaa,
+};
+
+use super::AoPassesReady;
+use super::pipeline::bevy_ssao_format;
+use crate::settings::DynamicAo;
+use crate::view::{DynamicAoView, view_texture};
+
+/// Marks a render-world view whose `ScreenSpaceAmbientOcclusion` this module inserted (an MSAA
+/// camera), not Bevy's extraction.
+#[derive(Component)]
+pub(crate) struct MsaaSsaoSlot;
+
+/// A view's SSAO resources, held aside while Bevy makes its SSAO bind groups.
+#[derive(Component)]
+pub(crate) struct ParkedSsao(ScreenSpaceAmbientOcclusionResources);
+
+/// The texture compose writes visibility into and PBR reads it from: Bevy's, or the parked one.
+pub(crate) fn visibility_texture<'a>(
+    resources: Option<&'a ScreenSpaceAmbientOcclusionResources>,
+    parked: Option<&'a ParkedSsao>,
+) -> Option<&'a CachedTexture> {
+    resources
+        .or(parked.map(|parked| &parked.0))
+        .map(|resources| &resources.screen_space_ambient_occlusion_texture)
+}
+
+/// Gives the render-world view of each active MSAA camera with [`DynamicAo`] Bevy's SSAO
+/// component once its passes are ready, and takes it away when the camera no longer qualifies.
+pub(crate) fn extract_msaa_slots(
+    mut commands: Commands,
+    cameras: Extract<
+        Query<
+            (
+                RenderEntity,
+                &Camera,
+                Option<&DynamicAo>,
+                &Msaa,
+                Has<ScreenSpaceAmbientOcclusion>,
+            ),
+            With<Camera3d>,
+        >,
+    >,
+    ready: Query<(), With<AoPassesReady>>,
+    slots: Query<Entity, With<MsaaSsaoSlot>>,
+) {
+    // Render entity → whether the main world gives it Bevy's component itself.
+    let mut unserved = HashMap::new();
+    for (entity, camera, ao, msaa, bevy_ssao) in &cameras {
+        let served =
+            camera.is_active && *msaa != Msaa::Off && ao.is_some_and(DynamicAo::works_with_msaa);
+        if !served {
+            unserved.insert(entity, bevy_ssao);
+            continue;
+        }
+        if slots.contains(entity) || ready.contains(entity) {
+            commands
+                .entity(entity)
+                .insert((ScreenSpaceAmbientOcclusion::default(), MsaaSsaoSlot));
+        }
+    }
+    for entity in &slots {
+        match unserved.get(&entity) {
+            // Bevy's extraction now manages the component.
+            Some(true) => {
+                commands.entity(entity).remove::<MsaaSsaoSlot>();
+            }
+            Some(false) => {
+                commands
+                    .entity(entity)
+                    .remove::<(MsaaSsaoSlot, ScreenSpaceAmbientOcclusion)>();
+            }
+            // The camera is gone; its render entity goes with it.
+            None => {}
+        }
+    }
+}
+
+/// On views whose viewport does not start at the target's corner, replaces the visibility
+/// texture with one the size of the target.
+pub(crate) fn place_split_screen_textures(
+    mut texture_cache: ResMut<TextureCache>,
+    render_device: Res<RenderDevice>,
+    adapter: Res<RenderAdapter>,
+    mut views: Query<(
+        &ExtractedCamera,
+        &DynamicAoView,
+        &mut ScreenSpaceAmbientOcclusionResources,
+    )>,
+) {
+    for (camera, view, mut resources) in &mut views {
+        let (true, Some(viewport), Some(target)) = (
+            view.replaces_bevy_ssao(),
+            camera.viewport.as_ref(),
+            camera.physical_target_size,
+        ) else {
+            continue;
+        };
+        if viewport.physical_position == UVec2::ZERO || target.min_element() == 0 {
+            continue;
+        }
+        resources.screen_space_ambient_occlusion_texture = view_texture(
+            &mut texture_cache,
+            &render_device,
+            "dynamic_ao_split_screen_visibility",
+            target,
+            bevy_ssao_format(&adapter),
+            TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
+        );
+    }
+}
+
+/// Holds the SSAO resources of MSAA views aside while Bevy makes its bind groups.
+pub(crate) fn park_msaa_resources(world: &mut World) {
+    let mut views = world.query_filtered::<Entity, (
+        With<MsaaSsaoSlot>,
+        With<ScreenSpaceAmbientOcclusionResources>,
+    )>();
+    let views: Vec<Entity> = views.iter(world).collect();
+    for entity in views {
+        let mut view = world.entity_mut(entity);
+        if let Some(resources) = view.take::<ScreenSpaceAmbientOcclusionResources>() {
+            view.insert(ParkedSsao(resources));
+        }
+    }
+}
+
+/// Puts the parked resources back, for the main pass.
+pub(crate) fn restore_msaa_resources(world: &mut World) {
+    let mut views = world.query_filtered::<Entity, With<ParkedSsao>>();
+    let views: Vec<Entity> = views.iter(world).collect();
+    for entity in views {
+        let mut view = world.entity_mut(entity);
+        if let Some(ParkedSsao(resources)) = view.take::<ParkedSsao>() {
+            view.insert(resources);
+        }
+    }
+}
+
+/// Whether any view's SSAO resources were parked this frame, so that the mesh view bind groups
+/// must be made again.
+pub(crate) fn any_msaa_slot(views: Query<(), With<MsaaSsaoSlot>>) -> bool {
+    !views.is_empty()
+}

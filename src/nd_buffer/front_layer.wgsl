@@ -1,0 +1,186 @@
+// Copies the viewport's pixels of Bevy's prepass into a single-sampled front layer the size of
+// the viewport (see `front_layer.rs` for why).
+
+#import bevy_core_pipeline::fullscreen_vertex_shader::FullscreenVertexOutput
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::decode_normal
+
+@group(0) @binding(0) var<uniform> view: View;
+#ifdef MULTISAMPLED
+@group(0) @binding(1) var prepass_depth: texture_depth_multisampled_2d;
+@group(0) @binding(2) var prepass_normal: texture_multisampled_2d<f32>;
+#ifdef MOTION_VECTORS
+@group(0) @binding(3) var prepass_motion_vectors: texture_multisampled_2d<f32>;
+#endif
+#else
+@group(0) @binding(1) var prepass_depth: texture_depth_2d;
+@group(0) @binding(2) var prepass_normal: texture_2d<f32>;
+#ifdef MOTION_VECTORS
+@group(0) @binding(3) var prepass_motion_vectors: texture_2d<f32>;
+#endif
+#endif
+
+struct FrontLayer {
+    @builtin(frag_depth) depth: f32,
+    @location(0) normal: vec4<f32>,
+#ifdef MOTION_VECTORS
+    @location(1) motion_vectors: vec4<f32>,
+#endif
+}
+
+#ifdef MULTISAMPLED
+// Where sample `s` of `samples` lies in its pixel: the standard positions, which WebGPU requires
+// for 4 samples and Vulkan's standard sample locations give for 2 and 8.
+fn sample_position(s: i32, samples: i32) -> vec2<f32> {
+    if samples == 2 {
+        return select(vec2(0.25), vec2(0.75), s == 0);
+    }
+    if samples == 4 {
+        let positions = array(vec2(0.375, 0.125), vec2(0.875, 0.375), vec2(0.125, 0.625), vec2(0.625, 0.875));
+        return positions[s];
+    }
+    if samples == 8 {
+        let positions = array(
+            vec2(0.5625, 0.3125), vec2(0.4375, 0.6875), vec2(0.8125, 0.5625), vec2(0.3125, 0.1875),
+            vec2(0.1875, 0.8125), vec2(0.0625, 0.4375), vec2(0.6875, 0.9375), vec2(0.9375, 0.0625),
+        );
+        return positions[s];
+    }
+    return vec2(0.5);
+}
+
+fn unproject(local: vec2<f32>, depth: f32) -> vec3<f32> {
+    let uv = local / view.viewport.zw;
+    let world = view.world_from_clip * vec4(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return world.xyz / world.w;
+}
+
+// The depth at the centre of the pixel at `local` of the surface that sample `s` shows: where
+// the ray through the centre meets the plane through the sample's point along its normal `n`.
+// The sample's own depth where that ray runs along the plane.
+fn depth_at_centre(local: vec2<f32>, s: i32, samples: i32, depth: f32, n: vec3<f32>) -> f32 {
+    let centre = local + 0.5;
+    let on_surface = unproject(local + sample_position(s, samples), depth);
+    let near = unproject(centre, 1.0);
+    let along = unproject(centre, depth) - near;
+    let facing = dot(n, along);
+    if abs(facing) <= 1e-3 * length(along) || depth <= 0.0 {
+        return depth;
+    }
+    let hit = near + along * (dot(n, on_surface - near) / facing);
+    let clip = view.clip_from_world * vec4(hit, 1.0);
+    let centred = clip.z / clip.w;
+    return select(depth, centred, clip.w > 0.0 && centred > 0.0 && centred <= 1.0);
+}
+
+// Whether the samples of `pixel` lie on one plane in screen space, as the depths of one triangle
+// do, so that their mean is the depth at the pixel's centre: the standard sample positions of
+// every count are centred on it. With 4 samples (the standard pattern pairs samples 0 and 3, 1
+// and 2 about the centre) that is tested exactly; with other counts, by their spread.
+fn one_surface(pixel: vec2<i32>, samples: i32) -> bool {
+    if samples == 4 {
+        let d = vec4<f32>(
+            textureLoad(prepass_depth, pixel, 0),
+            textureLoad(prepass_depth, pixel, 1),
+            textureLoad(prepass_depth, pixel, 2),
+            textureLoad(prepass_depth, pixel, 3),
+        );
+        return abs(d.x + d.w - d.y - d.z) <= 1e-4 * max(max(d.x, d.y), max(d.z, d.w)) + 1e-9;
+    }
+    var lo = 1e30;
+    var hi = 0.0;
+    for (var s = 0; s < samples; s += 1) {
+        let d = textureLoad(prepass_depth, pixel, s);
+        lo = min(lo, d);
+        hi = max(hi, d);
+    }
+    return hi - lo <= 0.02 * hi;
+}
+#endif
+
+@fragment
+fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
+    // The prepass has the size of the render target; the viewport starts at `view.viewport.xy`.
+    let local = floor(in.position.xy);
+    let pixel = vec2<i32>(local + view.viewport.xy);
+    var out: FrontLayer;
+#ifdef MULTISAMPLED
+    // Every pass reconstructs a pixel's position at its centre, but no sample lies there (those
+    // of 4 samples lie 0.4 px away), and on a floor seen at a grazing angle a depth read that far
+    // off tilts the reconstructed surface away from its normal enough to occlude itself. Where
+    // the samples lie on one surface their mean is the centre's depth. At silhouettes (two
+    // surfaces, whose average would be a point on neither) one sample's surface is carried to
+    // the centre along its plane.
+    let samples = i32(textureNumSamples(prepass_depth));
+    if one_surface(pixel, samples) {
+        var depth = 0.0;
+        var normal = vec4<f32>(0.0);
+        var motion = vec4<f32>(0.0);
+        for (var s = 0; s < samples; s += 1) {
+            depth += textureLoad(prepass_depth, pixel, s);
+            normal += textureLoad(prepass_normal, pixel, s);
+#ifdef MOTION_VECTORS
+            motion += textureLoad(prepass_motion_vectors, pixel, s);
+#endif
+        }
+        out.depth = depth / f32(samples);
+#ifdef MOTION_VECTORS
+        out.motion_vectors = motion / f32(samples);
+#endif
+        // Passes normalise what they decode, so the mean of the encodings is the mean normal:
+        // on a normal-mapped surface, closer to the centre's than any one sample's.
+        out.normal = normal / f32(samples);
+        return out;
+    }
+    // At a silhouette the surface that covers most samples most likely covers the centre,
+    // which is what a single-sampled prepass would show.
+    var nearest = 0;
+    var nearest_depth = textureLoad(prepass_depth, pixel, 0);
+    for (var s = 1; s < samples; s += 1) {
+        let d = textureLoad(prepass_depth, pixel, s);
+        // Reverse-Z: the larger depth is the nearer surface.
+        if d > nearest_depth {
+            nearest = s;
+            nearest_depth = d;
+        }
+    }
+    var covered = 0;
+    var behind = -1;
+    var behind_depth = 0.0;
+    for (var s = 0; s < samples; s += 1) {
+        let d = textureLoad(prepass_depth, pixel, s);
+        if nearest_depth - d <= 0.01 * nearest_depth {
+            covered += 1;
+        } else if behind < 0 || d > behind_depth {
+            behind = s;
+            behind_depth = d;
+        }
+    }
+    if 2 * covered <= samples && behind >= 0 {
+        nearest = behind;
+        nearest_depth = behind_depth;
+    }
+    var normal = vec4<f32>(0.0);
+    var same = 0.0;
+    for (var s = 0; s < samples; s += 1) {
+        if abs(textureLoad(prepass_depth, pixel, s) - nearest_depth) <= 0.01 * nearest_depth {
+            normal += textureLoad(prepass_normal, pixel, s);
+            same += 1.0;
+        }
+    }
+    out.normal = normal / same;
+    let n = decode_normal(out.normal.xyz);
+    out.depth = depth_at_centre(local, nearest, samples, nearest_depth, n);
+#ifdef MOTION_VECTORS
+    out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, nearest);
+#endif
+    return out;
+#else
+    out.depth = textureLoad(prepass_depth, pixel, 0);
+    out.normal = textureLoad(prepass_normal, pixel, 0);
+#ifdef MOTION_VECTORS
+    out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, 0);
+#endif
+    return out;
+#endif
+}
