@@ -139,7 +139,7 @@ fn msaa_camera_gets_the_ao_of_a_plain_camera() {
 }
 
 /// Every far-field scene, every mesh a sphere occluder, near field and spheres counted once at
-/// R = 0.75 m, captured without MSAA and then with 4 samples in the same app.
+/// R = 0.75 m and 2 m, captured without MSAA and then with 4 samples in the same app.
 #[test]
 fn msaa_matches_a_plain_capture_on_every_scene() {
     let mut all = far_scenes::procedural();
@@ -160,40 +160,55 @@ fn msaa_matches_a_plain_capture_on_every_scene() {
         let mut run = FarRun::new(&scene, folder);
         let bvh = run.bvh();
         let camera = run.gpu.camera;
-        let render = |run: &mut FarRun, msaa| {
-            run.gpu.app.world_mut().entity_mut(camera).insert(msaa);
-            run.render(true, Some(FarTerm::Spheres), FarFieldBlend::CountOnce, 0.75)
-        };
-        let plain = render(&mut run, Msaa::Off);
-        let msaa = render(&mut run, Msaa::Sample4);
-        let truth = plain.ground_truth(&bvh, 0.75);
-        let mask = plain.geometry_mask();
-        let error = rmse(&plain.visibility, &msaa.visibility);
-        let to_truth = |f: &Frame| masked_rmse(&f.visibility, &truth, &mask);
-        let (plain_truth, msaa_truth) = (to_truth(&plain), to_truth(&msaa));
-        println!(
-            "{}: MSAA against plain RMSE {error:.4}; against ground truth plain {plain_truth:.4}, \
-             MSAA {msaa_truth:.4}",
-            scene.name
-        );
-        worst = worst.max(error);
-        // Measured at most 0.0047 above the plain capture's error (DamagedHelmet).
-        assert!(
-            msaa_truth <= plain_truth + 0.006,
-            "{}: MSAA is further from ground truth ({msaa_truth}) than plain ({plain_truth})",
-            scene.name
-        );
-        // Measured 0–0.009 on boxes, walls, balls, skinned and morphed models on a floor; 0.014
-        // and 0.016 on the 4 cm walls of the Cornell box and the open room, 0.017 on
-        // DamagedHelmet, whose triangles are smaller than a pixel here: where one pixel holds
-        // several surfaces, a single-sampled prepass shows the one at its centre and ours the one
-        // most samples see.
-        let bound = match scene.name {
-            "open room" | "CornellBox on floor" | "DamagedHelmet on floor" => 0.02,
-            _ => 0.011,
-        };
-        if error > bound {
-            failed.push(format!("{}: MSAA against plain RMSE {error}", scene.name));
+        for radius in [0.75, 2.0] {
+            let render = |run: &mut FarRun, msaa| {
+                run.gpu.app.world_mut().entity_mut(camera).insert(msaa);
+                run.render(
+                    true,
+                    Some(FarTerm::Spheres),
+                    FarFieldBlend::CountOnce,
+                    radius,
+                )
+            };
+            let plain = render(&mut run, Msaa::Off);
+            let msaa = render(&mut run, Msaa::Sample4);
+            let truth = plain.ground_truth(&bvh, radius);
+            let mask = plain.geometry_mask();
+            let error = rmse(&plain.visibility, &msaa.visibility);
+            let to_truth = |f: &Frame| masked_rmse(&f.visibility, &truth, &mask);
+            let (plain_truth, msaa_truth) = (to_truth(&plain), to_truth(&msaa));
+            let name = format!("{}, R = {radius} m", scene.name);
+            println!(
+                "{name}: MSAA against plain RMSE {error:.4}; against ground truth plain \
+                 {plain_truth:.4}, MSAA {msaa_truth:.4}"
+            );
+            worst = worst.max(error);
+            // Measured at most 0.0047 above the plain capture's error at 0.75 m (DamagedHelmet),
+            // 0.0058 at 2 m (CesiumMan).
+            if msaa_truth > plain_truth + 0.007 {
+                failed.push(format!(
+                    "{name}: against ground truth {msaa_truth} vs {plain_truth}"
+                ));
+            }
+            // Measured 0–0.009 at 0.75 m and 0–0.016 at 2 m on boxes, walls, balls, skinned and
+            // morphed models on a floor; 0.014–0.021 on the 4 cm walls of the Cornell box and the
+            // open room and on DamagedHelmet, whose triangles are smaller than a pixel here: where
+            // one pixel holds several surfaces, a single-sampled prepass shows the one at its
+            // centre and ours the one most samples see, and a wider radius carries the difference
+            // to more receivers.
+            let thin = matches!(
+                scene.name,
+                "open room" | "CornellBox on floor" | "DamagedHelmet on floor"
+            );
+            let bound = match (thin, radius < 1.0) {
+                (false, true) => 0.011,
+                (false, false) => 0.018,
+                (true, true) => 0.02,
+                (true, false) => 0.024,
+            };
+            if error > bound {
+                failed.push(format!("{name}: MSAA against plain RMSE {error}"));
+            }
         }
     }
     println!("largest MSAA against plain RMSE {worst:.4}");
