@@ -79,6 +79,32 @@ fn check(render_app: &mut SubApp) -> bool {
     missing.is_empty()
 }
 
+/// How many of `len` items of `item_bytes` each one storage buffer binding of at most
+/// `max_binding` bytes holds: `len`, or fewer when they would pass the device's
+/// `max_storage_buffer_binding_size` (binding a larger buffer fails validation and ends the app).
+pub(crate) fn fit_storage_binding(len: usize, item_bytes: usize, max_binding: u64) -> usize {
+    let most = max_binding / item_bytes.max(1) as u64;
+    len.min(usize::try_from(most).unwrap_or(usize::MAX))
+}
+
+/// The warning for `len` items of `item_bytes` of which only `kept` fit one storage binding:
+/// names the limit and the sizes, and what is left out.
+pub(crate) fn storage_binding_warning(
+    what: &str,
+    len: usize,
+    kept: usize,
+    item_bytes: usize,
+    max_binding: u64,
+) -> String {
+    format!(
+        "{what}: {len} of {item_bytes} bytes each take {} bytes, more than this device's \
+         max_storage_buffer_binding_size ({max_binding} bytes); the last {} are left out while \
+         it lasts",
+        len as u64 * item_bytes as u64,
+        len - kept
+    )
+}
+
 /// The render app, where the adapter can run the plugin: what each part's `finish()` registers
 /// its render systems on.
 pub(crate) fn render_app(app: &mut App) -> Option<&mut SubApp> {
@@ -105,5 +131,20 @@ mod tests {
         assert!(missing[1].contains("max_storage_buffers_per_shader_stage is 0, needs 3"));
         assert_eq!(missing[2], "DownlevelFlags::COMPUTE_SHADERS");
         assert_eq!(missing[3], "DownlevelFlags::VERTEX_STORAGE");
+    }
+
+    #[test]
+    fn storage_bindings_keep_what_fits() {
+        assert_eq!(fit_storage_binding(10, 80, 800), 10);
+        assert_eq!(fit_storage_binding(11, 80, 800), 10);
+        assert_eq!(fit_storage_binding(11, 80, 79), 0);
+        assert_eq!(fit_storage_binding(3, 0, 0), 0);
+        let message = storage_binding_warning("SphereOccluder proxies", 11, 10, 80, 800);
+        assert_eq!(
+            message,
+            "SphereOccluder proxies: 11 of 80 bytes each take 880 bytes, more than this \
+             device's max_storage_buffer_binding_size (800 bytes); the last 1 are left out while \
+             it lasts"
+        );
     }
 }

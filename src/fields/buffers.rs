@@ -2,11 +2,11 @@
 //! uploaded every frame.
 
 use bevy::asset::{AssetEvent, AssetId, Assets};
-use bevy::camera::visibility::InheritedVisibility;
+use bevy::camera::visibility::{InheritedVisibility, RenderLayers};
 use bevy::ecs::message::MessageReader;
 use bevy::ecs::prelude::*;
 use bevy::log::warn;
-use bevy::math::{Affine3A, Mat4, Vec3, Vec4};
+use bevy::math::{Affine3A, Mat4, UVec4, Vec3, Vec4};
 use bevy::platform::collections::HashSet;
 use bevy::prelude::GlobalTransform;
 use bevy::render::{
@@ -18,6 +18,8 @@ use bytemuck::{Pod, Zeroable};
 
 use super::format::AoFieldData;
 use super::systems::ActiveAoField;
+use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::view::layer_bits;
 
 /// One occluder as `fields.wgsl` reads it.
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -30,12 +32,19 @@ pub(crate) struct FieldInstance {
     offset: u32,
     /// x: where the fade of the object's own surface ends, mesh units (half a cell).
     params: Vec4,
+    /// xy: the occluder's `RenderLayers` as bits (see [`layer_bits`]).
+    layers: UVec4,
 }
 
 impl FieldInstance {
-    /// The instance of `field` placed by `world_from_mesh`; `None` for a transform that cannot be
-    /// inverted (zero scale, NaN).
-    pub fn new(field: &AoFieldData, world_from_mesh: Affine3A, offset: u32) -> Option<Self> {
+    /// The instance of `field` placed by `world_from_mesh`, cast on views that share a layer with
+    /// `layers`; `None` for a transform that cannot be inverted (zero scale, NaN).
+    pub fn new(
+        field: &AoFieldData,
+        world_from_mesh: Affine3A,
+        offset: u32,
+        layers: Option<&RenderLayers>,
+    ) -> Option<Self> {
         let mesh_from_box = Affine3A::from_scale_rotation_translation(
             field.half_extent,
             Default::default(),
@@ -65,6 +74,7 @@ impl FieldInstance {
             resolution: field.resolution.to_array(),
             offset,
             params: Vec4::new(field.own_surface_fade(), 0.0, 0.0, 0.0),
+            layers: layer_bits(layers).extend(0).extend(0),
         })
     }
 }
@@ -115,12 +125,14 @@ pub(crate) fn extract_fields(
             &ActiveAoField,
             &GlobalTransform,
             Option<&InheritedVisibility>,
+            Option<&RenderLayers>,
         )>,
     >,
     fields: Extract<Res<Assets<AoFieldData>>>,
     mut events: Extract<MessageReader<AssetEvent<AoFieldData>>>,
     device: Res<RenderDevice>,
     mut over_budget: Local<HashSet<AssetId<AoFieldData>>>,
+    mut warned_instances: Local<bool>,
 ) {
     let buffers = buffers.as_mut();
     // A field changed in place (a `.aofield` file reloaded) keeps its id: its cells are uploaded
@@ -134,7 +146,7 @@ pub(crate) fn extract_fields(
     let budget = field_budget(device.limits().max_storage_buffer_binding_size);
     let mut used: Vec<AssetId<AoFieldData>> = Vec::new();
     let mut bytes = 0u64;
-    for (field, _, visibility) in &occluders {
+    for (field, _, visibility, _) in &occluders {
         let id = field.field.id();
         if !visibility.is_none_or(|v| v.get()) || used.contains(&id) {
             continue;
@@ -189,7 +201,7 @@ pub(crate) fn extract_fields(
         buffers.dirty = true;
     }
     buffers.instances.clear();
-    for (field, transform, visibility) in &occluders {
+    for (field, transform, visibility, layers) in &occluders {
         if !visibility.is_none_or(|v| v.get()) {
             continue;
         }
@@ -202,9 +214,27 @@ pub(crate) fn extract_fields(
         };
         // A baked field lies in the mesh's space scaled to the world's size.
         let world_from_field = transform.affine() * Affine3A::from_scale(field.baked_scale.recip());
-        if let Some(instance) = FieldInstance::new(data, world_from_field, *offset) {
+        if let Some(instance) = FieldInstance::new(data, world_from_field, *offset, layers) {
             buffers.instances.push(instance);
         }
+    }
+    let max_binding = device.limits().max_storage_buffer_binding_size;
+    let len = buffers.instances.len();
+    let kept = fit_storage_binding(len, size_of::<FieldInstance>(), max_binding);
+    if kept < len {
+        if !std::mem::replace(&mut *warned_instances, true) {
+            warn!(
+                "{}",
+                storage_binding_warning(
+                    "AoField occluders",
+                    len,
+                    kept,
+                    size_of::<FieldInstance>(),
+                    max_binding
+                )
+            );
+        }
+        buffers.instances.truncate(kept);
     }
     buffers.count = buffers.instances.len() as u32;
     if buffers.count == 0 {

@@ -24,6 +24,9 @@ use super::format::AoFieldData;
 /// by 0.01, a unit plane scaled to a floor); it is baked again, in the background, when that
 /// scale changes by more than about 1 %. A field loaded from a file lies in the mesh's space and
 /// reaches as far in mesh units as it was baked for: bake it at the scale it is shown at.
+///
+/// The object casts only on the cameras that draw it: those that share a layer of the entity's
+/// `RenderLayers`.
 #[derive(Component, Reflect, Clone, Debug, PartialEq)]
 #[reflect(Component, Default, Clone, Debug)]
 pub enum AoField {

@@ -15,7 +15,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::cap_occlusion::{cap_occlusion, share_beyond}
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
 
 struct FieldInstance {
     // Unit cube [-1, 1]³ to world: places the grid box.
@@ -29,6 +29,8 @@ struct FieldInstance {
     offset: u32,
     // x: how far from the object's surface its own surface's fade ends, mesh units.
     params: vec4<f32>,
+    // xy: the occluder's RenderLayers as bits (`seen_by_view`).
+    layers: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -60,9 +62,14 @@ fn vertex(
     @builtin(instance_index) instance_index: u32,
 ) -> VertexOutput {
     var cube = CUBE;
-    let world = instances[instance_index].world_from_box * vec4<f32>(cube[vertex_index], 1.0);
+    let instance = instances[instance_index];
+    let world = instance.world_from_box * vec4<f32>(cube[vertex_index], 1.0);
     var out: VertexOutput;
     out.position = view.clip_from_world * world;
+    if !seen_by_view(settings, instance.layers.xy) {
+        // Every corner on one point beyond the far plane: the box covers nothing.
+        out.position = vec4<f32>(0.0, 0.0, 2.0, 1.0);
+    }
     out.instance = instance_index;
     return out;
 }

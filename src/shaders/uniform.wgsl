@@ -54,6 +54,15 @@ struct DynamicAoUniform {
     voxel_blur_radius: u32,
     // Where the camera's viewport starts in its render target, pixels.
     viewport_origin: vec2<u32>,
+    // The camera's RenderLayers as bits: layer n is bit n % 32 of word n / 32, layers past 62
+    // share the last bit (`view::layers`).
+    render_layers: vec2<u32>,
+}
+
+// Whether a far-field occluder on `layers` (bits as in `render_layers`) casts on this view: Bevy
+// draws an entity in the views it shares a layer with.
+fn seen_by_view(settings: DynamicAoUniform, layers: vec2<u32>) -> bool {
+    return any((layers & settings.render_layers) != vec2<u32>(0u));
 }
 
 // The texel of the visibility texture (of size `texture_size`) that holds `pixel` of a viewport

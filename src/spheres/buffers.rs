@@ -1,19 +1,36 @@
 //! The proxies of every occluder in one storage buffer, extracted and uploaded every frame.
 
+use bevy::camera::visibility::RenderLayers;
 use bevy::ecs::prelude::*;
-use bevy::math::Vec4;
+use bevy::log::warn;
+use bevy::math::{UVec4, Vec4};
 use bevy::render::{
     Extract,
     render_resource::*,
     renderer::{RenderDevice, RenderQueue},
 };
 
+use bytemuck::{Pod, Zeroable};
+
+use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::view::layer_bits;
+
 use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
 
-/// One proxy as `splat.wgsl` reads it: centre and bounding radius, the three half-extent vectors,
-/// then the kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and 1 for a proxy of
-/// a skinned mesh (see [`OccluderSpheres::articulated`]).
-type GpuSphere = [Vec4; 5];
+/// One proxy as `splat.wgsl` reads it (`Proxy`).
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(super) struct GpuSphere {
+    /// Centre and bounding radius, metres.
+    centre_bound: Vec4,
+    /// The three half-extent vectors, metres.
+    axes: [Vec4; 3],
+    /// The kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and 1 for a proxy of a
+    /// skinned mesh (see [`OccluderSpheres::articulated`]).
+    kind: Vec4,
+    /// The mesh's `RenderLayers` as bits (see [`layer_bits`]), then padding.
+    layers: UVec4,
+}
 
 /// Every sphere of every occluder this frame, in one buffer all views share.
 #[derive(Resource)]
@@ -33,10 +50,11 @@ impl Default for SphereBuffer {
 
 pub(crate) fn extract_spheres(
     mut buffer: ResMut<SphereBuffer>,
-    occluders: Extract<Query<&OccluderSpheres>>,
+    occluders: Extract<Query<(&OccluderSpheres, Option<&RenderLayers>)>>,
 ) {
     buffer.buffer.clear();
-    for occluder in &occluders {
+    for (occluder, layers) in &occluders {
+        let layers = layer_bits(layers).extend(0).extend(0);
         for proxy in &occluder.spheres {
             let d_far = match occluder.reach {
                 ProxyReach::CameraRadius => 0.0,
@@ -46,26 +64,51 @@ pub(crate) fn extract_spheres(
                 ProxyShape::Boxes => 0.0,
                 ProxyShape::Spheres => 1.0,
             };
-            buffer.buffer.push([
-                proxy.center.extend(proxy.radius),
-                proxy.axes.x_axis.extend(0.0),
-                proxy.axes.y_axis.extend(0.0),
-                proxy.axes.z_axis.extend(0.0),
-                Vec4::new(kind, d_far, f32::from(u8::from(occluder.articulated)), 0.0),
-            ]);
+            buffer.buffer.push(GpuSphere {
+                centre_bound: proxy.center.extend(proxy.radius),
+                axes: [
+                    proxy.axes.x_axis.extend(0.0),
+                    proxy.axes.y_axis.extend(0.0),
+                    proxy.axes.z_axis.extend(0.0),
+                ],
+                kind: Vec4::new(kind, d_far, f32::from(u8::from(occluder.articulated)), 0.0),
+                layers,
+            });
         }
     }
     buffer.count = buffer.buffer.len() as u32;
     if buffer.count == 0 {
         // A binding needs a buffer; nothing is drawn from it.
-        buffer.buffer.push([Vec4::ZERO; 5]);
+        buffer.buffer.push(GpuSphere::zeroed());
     }
 }
 
+/// Uploads the proxies, as many as one storage binding holds (the rest are left out, with one
+/// warning).
 pub(crate) fn write_sphere_buffer(
     mut buffer: ResMut<SphereBuffer>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
+    mut warned: Local<bool>,
 ) {
+    let max_binding = device.limits().max_storage_buffer_binding_size;
+    let len = buffer.count as usize;
+    let kept = fit_storage_binding(len, size_of::<GpuSphere>(), max_binding);
+    if kept < len {
+        if !std::mem::replace(&mut *warned, true) {
+            warn!(
+                "{}",
+                storage_binding_warning(
+                    "SphereOccluder proxies",
+                    len,
+                    kept,
+                    size_of::<GpuSphere>(),
+                    max_binding
+                )
+            );
+        }
+        buffer.buffer.truncate(kept.max(1));
+        buffer.count = kept as u32;
+    }
     buffer.buffer.write_buffer(&device, &queue);
 }

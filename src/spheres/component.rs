@@ -10,7 +10,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// Put it on an entity with a `Mesh3d`, or on the root of a glTF scene: then every mesh below it
 /// takes part, each with its own proxies. Each mesh is fitted once, in its rest pose, and every
 /// frame the proxies follow the skinned and morphed vertices, so they follow animation. A mesh
-/// whose `Visibility` hides it casts nothing.
+/// whose `Visibility` hides it casts nothing, and a mesh casts only on the cameras that draw it:
+/// those that share a layer of its `RenderLayers` (the mesh entity's own, as Bevy reads them).
 ///
 /// By default the proxies are oriented boxes that fill the mesh's solid ([`ProxyShape::Boxes`]):
 /// one for a box, a wall or a floor, a few for a character. Each blocks exactly the share of a

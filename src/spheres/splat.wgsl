@@ -10,7 +10,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::proxy_occlusion::{face_normal, face_occlusion, sphere_occlusion_within}
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
 #import bevy_dynamic_ao::cap_occlusion::share_beyond
 
 struct Proxy {
@@ -21,6 +21,8 @@ struct Proxy {
     // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius; z: 1 for a
     // proxy of a skinned mesh, whose proxies compose joins by their union.
     kind: vec4<f32>,
+    // xy: the mesh's RenderLayers as bits (`seen_by_view`).
+    layers: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -87,7 +89,11 @@ fn vertex(
 ) -> VertexOutput {
     let proxy = proxies[instance_index];
     let center = (view.view_from_world * vec4<f32>(proxy.centre_bound.xyz, 1.0)).xyz;
-    let bounds = reach_rectangle(center, influence(proxy));
+    var bounds = reach_rectangle(center, influence(proxy));
+    if !seen_by_view(settings, proxy.layers.xy) {
+        // Off screen: the billboard covers nothing.
+        bounds = vec4<f32>(2.0, 2.0, 2.0, 2.0);
+    }
     let lo = clamp(bounds.xy, vec2<f32>(-1.0), vec2<f32>(1.0));
     let hi = clamp(bounds.zw, vec2<f32>(-1.0), vec2<f32>(1.0));
     var corners = array<vec2<f32>, 6>(

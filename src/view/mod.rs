@@ -29,8 +29,10 @@ use crate::schedule::DynamicAoExtract;
 use crate::settings::{AoTechnique, DynamicAo};
 
 mod cameras;
+mod layers;
 mod uniform;
 
+pub(crate) use layers::{layer_bits, on_every_layer_of};
 pub(crate) use uniform::DynamicAoUniform;
 
 /// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.

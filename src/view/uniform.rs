@@ -1,7 +1,7 @@
 //! Extraction of each camera's settings into its render-world view: the neutral
 //! [`DynamicAoView`](super::DynamicAoView) and the uniform every pass reads.
 
-use bevy::camera::{Camera, Camera3d};
+use bevy::camera::{Camera, Camera3d, visibility::RenderLayers};
 use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
@@ -10,6 +10,7 @@ use bevy::render::{Extract, render_resource::ShaderType, sync_world::RenderEntit
 
 use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
 
+use super::layers::layer_bits;
 use super::{DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, PendingPasses};
 
 /// The uniform every pass of a view reads; `DynamicAoUniform` in `shaders/uniform.wgsl`, field
@@ -73,6 +74,9 @@ pub(crate) struct DynamicAoUniform {
     pub voxel_blur_radius: u32,
     /// Where the camera's viewport starts in its render target, pixels.
     pub viewport_origin: UVec2,
+    /// The camera's `RenderLayers` as bits (see [`layer_bits`]): far-field occluders on none of
+    /// them cast nothing on this view.
+    pub render_layers: UVec2,
 }
 
 /// The render-world components a view has while it runs the plugin; each technique drops its
@@ -95,6 +99,7 @@ pub(super) fn extract_views(
                 &DynamicAo,
                 &Msaa,
                 Has<ScreenSpaceAmbientOcclusion>,
+                Option<&RenderLayers>,
             ),
             With<Camera3d>,
         >,
@@ -108,7 +113,7 @@ pub(super) fn extract_views(
     for entity in &without {
         commands.entity(entity).remove::<ViewState>();
     }
-    for (entity, camera, ao, msaa, has_ssao) in &cameras {
+    for (entity, camera, ao, msaa, has_ssao, layers) in &cameras {
         let mut entity_commands = commands.entity(entity);
         // An MSAA camera has no Bevy SSAO component in the main world; compose gives its view
         // one (see `compose::ssao_slot`).
@@ -205,6 +210,7 @@ pub(super) fn extract_views(
                     .viewport
                     .as_ref()
                     .map_or(UVec2::ZERO, |viewport| viewport.physical_position),
+                render_layers: layer_bits(layers),
             },
         ));
     }

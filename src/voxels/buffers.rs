@@ -12,6 +12,8 @@ use bevy::render::{
 };
 use bytemuck::Zeroable;
 
+use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+
 use super::component::{VoxelGridReadback, grid_words};
 use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
 
@@ -108,7 +110,7 @@ pub(crate) fn write_voxel_buffers(
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
     storage_buffers: Res<RenderAssets<GpuShaderBuffer>>,
-    mut warned: Local<(bool, bool)>,
+    mut warned: Local<(bool, bool, bool)>,
 ) {
     let buffers = buffers.as_mut();
     let max_bytes = device.limits().max_storage_buffer_binding_size;
@@ -142,6 +144,25 @@ pub(crate) fn write_voxel_buffers(
         buffers.triangles.clear();
         buffers.triangles.extend(values);
         buffers.counts.triangles = buffers.triangles.len() as u32;
+    }
+    let len = buffers.triangles.len();
+    let kept_triangles = fit_storage_binding(len, size_of::<GridTriangle>(), max_bytes);
+    if kept_triangles < len {
+        if !warned.2 {
+            warned.2 = true;
+            warn!(
+                "{}",
+                storage_binding_warning(
+                    "VoxelAoVolume triangles",
+                    len,
+                    kept_triangles,
+                    size_of::<GridTriangle>(),
+                    max_bytes
+                )
+            );
+        }
+        buffers.triangles.truncate(kept_triangles);
+        buffers.counts.triangles = kept_triangles as u32;
     }
     buffers.words = words as u32 * 2;
     // Bindings need a buffer even when there is nothing to bind; nothing reads these entries.

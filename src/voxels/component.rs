@@ -24,6 +24,13 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// 32 rays). Several volumes may exist; where they overlap, a surface takes the darkest of their
 /// answers.
 ///
+/// `RenderLayers`: a camera samples the volume when it shares a layer with the volume's entity,
+/// and a mesh is voxelized into the volume only when it is on every layer of the volume (without
+/// the component, both are on layer 0). So no camera is darkened by a mesh it does not draw. A
+/// mesh on other layers than the volume's casts through a volume of its own layers: in a split
+/// screen whose players see layer 0 plus a layer each, one volume on layer 0 for the shared
+/// scene and one on each player's layer.
+///
 /// ```no_run
 /// # use bevy::prelude::*;
 /// # use bevy_dynamic_ao::prelude::*;

@@ -43,6 +43,10 @@ pub(crate) struct GpuVolume {
     /// Bit 0: the occupied voxels are drawn (`ShowOccupiedVoxels`); bit 1: hits count without
     /// falloff (`VoxelFalloff::None`).
     pub flags: u32,
+    /// The volume's `RenderLayers` as bits (see `view::layer_bits`): views on none of them do
+    /// not sample it.
+    pub layers: [u32; 2],
+    pub _padding: [u32; 2],
 }
 
 impl GpuVolume {
@@ -84,6 +88,8 @@ impl GpuVolume {
                 noise_cell: rays.noise_cell,
                 cell: rays.cell.to_array(),
                 flags: u32::from(show) | (u32::from(rays.falloff == VoxelFalloff::None) << 1),
+                layers: [1, 0],
+                _padding: [0; 2],
             },
             grid_from_world,
             rays,

@@ -6,18 +6,19 @@ use bevy::core_pipeline::FullscreenShader;
 use bevy::ecs::prelude::*;
 use bevy::render::{
     camera::ExtractedCamera,
+    extract_component::DynamicUniformIndex,
     render_resource::{
         binding_types::{storage_buffer_read_only_sized, texture_depth_2d, uniform_buffer},
         *,
     },
     renderer::{RenderContext, RenderDevice, ViewQuery},
-    view::{ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms},
+    view::{ViewTarget, ViewUniform, ViewUniformOffset},
 };
 use bevy::shader::Shader;
 use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
-use crate::view::{DynamicAoView, FarTerm};
+use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, ViewBindings};
 
 #[derive(Resource)]
 pub(crate) struct ShowVoxelsPipeline {
@@ -38,6 +39,7 @@ impl FromWorld for ShowVoxelsPipeline {
                     storage_buffer_read_only_sized(false, None),
                     storage_buffer_read_only_sized(false, None),
                     uniform_buffer::<VoxelParams>(false),
+                    uniform_buffer::<DynamicAoUniform>(true),
                 ),
             ),
         );
@@ -87,25 +89,32 @@ pub(crate) fn prepare_show_voxels(
     pipeline_cache: Res<PipelineCache>,
     mut pipelines: ResMut<SpecializedRenderPipelines<ShowVoxelsPipeline>>,
     buffers: Res<VoxelBuffers>,
-    view_uniforms: Res<ViewUniforms>,
+    bindings: ViewBindings,
     views: Query<(Entity, &DynamicAoView, &ViewTarget, FrontLayer)>,
 ) {
     let shown = buffers.any_shown();
     for (entity, view, target, prepass) in &views {
-        let (true, true, Some(depth), Some(view_binding), Some((volumes, grid, params))) = (
+        let (
+            true,
+            true,
+            Some(depth),
+            Some((view_binding, settings)),
+            Some((volumes, grid, params)),
+        ) = (
             shown,
             view.has(FarTerm::Voxels),
             prepass.depth(),
-            view_uniforms.uniforms.binding(),
+            bindings.get(),
             buffers.bindings(),
-        ) else {
+        )
+        else {
             commands.entity(entity).remove::<ShowVoxels>();
             continue;
         };
         let bind_group = render_device.create_bind_group(
             "dynamic_ao_show_voxels_bind_group",
             &pipeline_cache.get_bind_group_layout(&pipeline.layout),
-            &BindGroupEntries::sequential((view_binding, depth, volumes, grid, params)),
+            &BindGroupEntries::sequential((view_binding, depth, volumes, grid, params, settings)),
         );
         let id = pipelines.specialize(&pipeline_cache, &pipeline, target.main_texture_format());
         commands.entity(entity).insert(ShowVoxels {
@@ -121,11 +130,12 @@ pub(crate) fn show_voxels_pass(
         &ViewTarget,
         &ShowVoxels,
         &ViewUniformOffset,
+        &DynamicUniformIndex<DynamicAoUniform>,
     )>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, target, show, view_offset) = view.into_inner();
+    let (camera, target, show, view_offset, settings_index) = view.into_inner();
     let Some(pipeline) = pipeline_cache.get_render_pipeline(show.pipeline) else {
         return;
     };
@@ -141,6 +151,10 @@ pub(crate) fn show_voxels_pass(
         pass.set_camera_viewport(viewport);
     }
     pass.set_render_pipeline(pipeline);
-    pass.set_bind_group(0, &show.bind_group, &[view_offset.offset]);
+    pass.set_bind_group(
+        0,
+        &show.bind_group,
+        &[view_offset.offset, settings_index.index()],
+    );
     pass.draw(0..3, 0..1);
 }

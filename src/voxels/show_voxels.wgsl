@@ -5,6 +5,7 @@
 #import bevy_core_pipeline::fullscreen_vertex_shader::FullscreenVertexOutput
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::world_position
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
 #import bevy_dynamic_ao::voxel_grid::{VoxelParams, VoxelVolume, cell_index, to_grid}
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -12,6 +13,7 @@
 @group(0) @binding(2) var<storage, read> volumes: array<VoxelVolume>;
 @group(0) @binding(3) var<storage, read> grid: array<u32>;
 @group(0) @binding(4) var<uniform> params: VoxelParams;
+@group(0) @binding(5) var<uniform> settings: DynamicAoUniform;
 
 fn is_occupied(volume: VoxelVolume, cell: vec3<i32>) -> bool {
     let i = cell_index(volume, cell);
@@ -76,7 +78,8 @@ fn fragment(in: FullscreenVertexOutput) -> @location(0) vec4<f32> {
     var best = vec2<f32>(2.0, 0.0);
     for (var v = 0u; v < params.volumes; v++) {
         let volume = volumes[v];
-        if (volume.flags & 1u) == 0u || volume.resolution == 0u {
+        if (volume.flags & 1u) == 0u || volume.resolution == 0u
+            || !seen_by_view(settings, volume.layers) {
             continue;
         }
         let start = to_grid(volume, near);

@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use bevy::asset::{AssetId, Assets};
-use bevy::camera::visibility::InheritedVisibility;
+use bevy::camera::visibility::{InheritedVisibility, RenderLayers};
 use bevy::core_pipeline::prepass::MotionVectorPrepass;
 use bevy::ecs::prelude::*;
 use bevy::ecs::system::SystemParam;
@@ -31,6 +31,7 @@ use super::mesh_cache::{VoxelMesh, VoxelMeshCache};
 use crate::geometry::deform::{Deformer, Pose, mesh_morph_weights, skin_joints};
 use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
 use crate::settings::{AoTechnique, DynamicAo};
+use crate::view::{layer_bits, on_every_layer_of};
 
 /// What a warning is about; each entity is warned about each problem once.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -62,6 +63,7 @@ type VolumeQuery<'w, 's> = Query<
         &'static GlobalTransform,
         Has<ShowOccupiedVoxels>,
         Option<&'static Name>,
+        Option<&'static RenderLayers>,
     ),
 >;
 
@@ -76,6 +78,7 @@ type MeshQuery<'w, 's> = Query<
         Option<&'static MeshMorphWeights>,
         Option<&'static InheritedVisibility>,
         Option<&'static Name>,
+        Option<&'static RenderLayers>,
     ),
     Without<NotVoxelOccluder>,
 >;
@@ -110,6 +113,8 @@ pub(crate) fn forget_removed_volumes(
 /// A volume in use this frame: its grid slot and its world-space bounds.
 struct ActiveVolume {
     entity: Entity,
+    /// Meshes on every one of these layers are voxelized into it.
+    layers: Option<RenderLayers>,
     info: VoxelGridInfo,
     grid_from_world: Affine3A,
     resolution: f32,
@@ -149,7 +154,7 @@ pub(crate) fn gather_triangles(
     }
 
     let mut counts = vec![0u32; active.len()];
-    for (entity, mesh3d, transform, skinned, morphs, visibility, name) in &meshes_query {
+    for (entity, mesh3d, transform, skinned, morphs, visibility, name, layers) in &meshes_query {
         if !visibility.is_none_or(|v| v.get()) {
             continue;
         }
@@ -192,7 +197,10 @@ pub(crate) fn gather_triangles(
             continue;
         };
         for (index, volume) in active.iter().enumerate() {
-            if !volume.overlaps(world_min, world_max) {
+            // Every view that samples the volume must be one that draws the mesh.
+            if !volume.overlaps(world_min, world_max)
+                || !on_every_layer_of(layers, volume.layers.as_ref())
+            {
                 continue;
             }
             let before = frame.triangles.len();
@@ -231,13 +239,13 @@ fn place_volumes(
     sorted.sort_by_key(|(entity, ..)| *entity);
     let mut active = Vec::new();
     let mut offset = 0u32;
-    for (entity, volume, transform, show, name) in sorted {
+    for (entity, volume, transform, show, name, layers) in sorted {
         let placed = volume.sanitized().and_then(|(volume, fixes)| {
             GpuVolume::new(&volume, transform.affine(), offset, show)
                 .map(|gpu| (volume, fixes, gpu))
                 .ok_or(VoxelVolumeError::BadTransform)
         });
-        let (volume, fixes, (gpu, grid_from_world, rays)) = match placed {
+        let (volume, fixes, (mut gpu, grid_from_world, rays)) = match placed {
             Ok(placed) => placed,
             Err(error) => {
                 let message = format!("VoxelAoVolume {{label}} casts no occlusion: {error}");
@@ -252,8 +260,10 @@ fn place_volumes(
         }
         let n = volume.resolution as f32;
         let (min, max) = box_bounds(grid_from_world.inverse(), Vec3::ZERO, Vec3::splat(n));
+        gpu.layers = layer_bits(layers).to_array();
         active.push(ActiveVolume {
             entity,
+            layers: layers.cloned(),
             info: VoxelGridInfo {
                 grid_from_world,
                 resolution: volume.resolution,

@@ -16,7 +16,7 @@
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::sampling::{frame_offset, frame_step, pcg_hash}
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
 #import bevy_dynamic_ao::math::{tangent_frame, wendland}
 #import bevy_dynamic_ao::voxel_grid::{
     VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, to_grid, to_grid_direction,
@@ -181,7 +181,7 @@ fn voxel_ao(@builtin(global_invocation_id) id: vec3<u32>) {
         let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
         for (var v = 0u; v < params.volumes; v++) {
             let volume = volumes[v];
-            if volume.resolution > 0u {
+            if volume.resolution > 0u && seen_by_view(settings, volume.layers) {
                 occlusion = max(occlusion, volume_occlusion(volume, p, n));
             }
         }

@@ -29,6 +29,8 @@ struct VoxelVolume {
     cell: vec3<f32>,
     // Bit 0: the occupied voxels are drawn; bit 1: hits count without falloff.
     flags: u32,
+    // The volume's RenderLayers as bits (`seen_by_view`).
+    layers: vec2<u32>,
 }
 
 // Counts of this frame's buffers, which may be longer; `voxels::render::VoxelParams`.

@@ -3,6 +3,7 @@
 //! at the right pixels.
 
 use bevy::camera::Hdr;
+use bevy::camera::visibility::RenderLayers;
 use bevy::camera::{RenderTarget, Viewport};
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
@@ -10,7 +11,7 @@ use bevy_dynamic_ao::prelude::*;
 
 use crate::far_scenes::{self, FarRun};
 use crate::far_terms::FarTerm;
-use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, plain_ao};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, largest_difference, plain_ao};
 use crate::log_capture::{assert_logged_once, logged};
 use crate::models::shared_assets;
 use crate::scenes;
@@ -430,5 +431,75 @@ fn every_term_works_on_an_orthographic_camera() {
             *ortho <= perspective + 0.004,
             "{name}: orthographic RMSE {ortho} against perspective {perspective}"
         );
+    }
+}
+
+/// Far-field occluders cast only on views that share a render layer with them, as Bevy draws
+/// them. A box just outside the view on layer 1 (the floor on layers 0 and 1) casts on a layer-0
+/// camera what no box casts, and on a layer-1 camera what it casts when everything is on layer
+/// 0. Each term alone, the box and the floor spheres, AO fields and voxels; the voxel volume is
+/// given layer 1 with the camera, as it voxelizes the meshes on every one of its layers.
+#[test]
+fn render_layers_decide_which_views_each_term_casts_on() {
+    let scene = far_scenes::procedural().swap_remove(4);
+    assert_eq!(scene.name, "box beside view");
+    let mut run = FarRun::new(&scene, None);
+    let radius = 0.75;
+    let camera = run.gpu.camera;
+    let (floor, cube) = {
+        let world = run.gpu.app.world_mut();
+        let mut query = world.query::<&Transform>();
+        let beside = |e: &&Entity| query.get(world, **e).unwrap().translation.x > 1.0;
+        let cube = *run.meshes.iter().find(beside).expect("the box");
+        let floor = *run.meshes.iter().find(|e| **e != cube).expect("the floor");
+        (floor, cube)
+    };
+    let at = |run: &mut FarRun, x: f32| {
+        let world = run.gpu.app.world_mut();
+        world.get_mut::<Transform>(cube).unwrap().translation.x = x;
+    };
+    for term in FarTerm::ALL {
+        let render = |run: &mut FarRun| {
+            run.render(false, Some(term), FarFieldBlend::CountOnce, radius)
+                .visibility
+        };
+        let with = render(&mut run);
+        at(&mut run, 100.0);
+        let without = render(&mut run);
+        at(&mut run, 2.0);
+
+        let world = run.gpu.app.world_mut();
+        world.entity_mut(cube).insert(RenderLayers::layer(1));
+        world
+            .entity_mut(floor)
+            .insert(RenderLayers::from_layers(&[0, 1]));
+        let other_layer = render(&mut run);
+
+        // Placed by the first render with voxels.
+        let volume = run.volume();
+        let world = run.gpu.app.world_mut();
+        for entity in [Some(camera), volume].into_iter().flatten() {
+            world.entity_mut(entity).insert(RenderLayers::layer(1));
+        }
+        let same_layer = render(&mut run);
+
+        let world = run.gpu.app.world_mut();
+        for entity in [Some(camera), volume, Some(floor), Some(cube)]
+            .into_iter()
+            .flatten()
+        {
+            world.entity_mut(entity).remove::<RenderLayers>();
+        }
+        let name = term.name();
+        let casts = largest_difference(&with, &without);
+        let hidden = largest_difference(&other_layer, &without);
+        let seen = largest_difference(&same_layer, &with);
+        println!("{name}: the box casts up to {casts}; other layer {hidden}, same layer {seen}");
+        assert!(casts > 0.05, "{name}: the box casts only {casts}");
+        assert!(
+            hidden < 1e-4,
+            "{name}: the box on another layer casts {hidden}"
+        );
+        assert!(seen < 1e-4, "{name}: on a shared layer off by {seen}");
     }
 }

@@ -259,6 +259,11 @@ impl FarRun {
         self.volume = Some((volume, radius));
     }
 
+    /// The voxel volume, once a render with voxels placed it.
+    pub fn volume(&self) -> Option<Entity> {
+        self.volume.map(|(entity, _)| entity)
+    }
+
     /// Renders the near field, or the image-space settings of `image_space` (or no image-space
     /// term), with `far` joined by `blend`, every
     /// term counting within `radius`.

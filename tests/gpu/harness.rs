@@ -1,7 +1,7 @@
 //! The one headless app every GPU test uses: build a scene, render a few frames on whatever
 //! adapter wgpu finds (lavapipe on CI), read the AO buffer, the ND-buffer and the lit image back.
 
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
@@ -10,6 +10,8 @@ use bevy::prelude::*;
 use bevy::render::{
     gpu_readback::{Readback, ReadbackComplete},
     render_resource::TextureFormat,
+    renderer::RenderDevice,
+    settings::{RenderCreation, WgpuLimits, WgpuSettings},
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
 use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
@@ -146,7 +148,31 @@ impl Gpu {
         Self::build(scene, ao, None, false)
     }
 
+    /// Like [`Gpu::new`] on a device whose `max_storage_buffer_binding_size` is `bytes`, every
+    /// other limit the adapter's.
+    pub fn with_storage_binding_limit(scene: &SceneSpec, ao: DynamicAo, bytes: u64) -> Self {
+        static ADAPTER_LIMITS: OnceLock<WgpuLimits> = OnceLock::new();
+        let mut limits = ADAPTER_LIMITS
+            .get_or_init(|| {
+                let probe = Self::new(&SceneSpec::new(scene.camera), plain_ao());
+                probe.app.world().resource::<RenderDevice>().limits()
+            })
+            .clone();
+        limits.max_storage_buffer_binding_size = bytes;
+        Self::build_with_limits(scene, ao, None, true, Some(limits))
+    }
+
     fn build(scene: &SceneSpec, ao: DynamicAo, folder: Option<&str>, synchronous: bool) -> Self {
+        Self::build_with_limits(scene, ao, folder, synchronous, None)
+    }
+
+    fn build_with_limits(
+        scene: &SceneSpec,
+        ao: DynamicAo,
+        folder: Option<&str>,
+        synchronous: bool,
+        limits: Option<WgpuLimits>,
+    ) -> Self {
         let turn = GPU_TURN
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
@@ -154,6 +180,10 @@ impl Gpu {
         let plugins = common::headless_plugins()
             .set(bevy::render::RenderPlugin {
                 synchronous_pipeline_compilation: synchronous,
+                render_creation: RenderCreation::Automatic(Box::new(WgpuSettings {
+                    constrained_limits: limits,
+                    ..default()
+                })),
                 ..default()
             })
             .set(crate::log_capture::log_plugin());

@@ -18,6 +18,7 @@ mod back_layer;
 mod bad_input;
 mod camera_setups;
 mod cameras;
+mod device_limits;
 mod examples;
 mod far_field;
 mod far_scenes;
