@@ -118,6 +118,7 @@ pub mod filter;
 pub mod geometry;
 pub mod horizon;
 mod image_space;
+mod memory;
 pub mod nd_buffer;
 pub mod near_field;
 pub mod ray_march;
@@ -133,6 +134,7 @@ pub mod voxels;
 use bevy::app::{App, Plugin};
 use bevy::shader::load_shader_library;
 
+pub use memory::DynamicAoGpuMemory;
 pub use settings::{
     AoBlur, AoPreset, AoTechnique, AoTemporal, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
     HorizonParams, NearFieldParams, RayMarchParams,
@@ -192,6 +194,7 @@ impl Plugin for DynamicAoPlugin {
     }
 
     fn finish(&self, app: &mut App) {
+        memory::insert(app);
         schedule::configure(app);
     }
 }

@@ -95,10 +95,14 @@ pub(crate) fn extract_msaa_slots(
             Some(true) => {
                 commands.entity(entity).remove::<MsaaSsaoSlot>();
             }
+            // Bevy never takes its SSAO textures off a view; left there, its SSAO bind groups
+            // would be made next frame with the multisampled prepass, which fails validation.
             Some(false) => {
-                commands
-                    .entity(entity)
-                    .remove::<(MsaaSsaoSlot, ScreenSpaceAmbientOcclusion)>();
+                commands.entity(entity).remove::<(
+                    MsaaSsaoSlot,
+                    ScreenSpaceAmbientOcclusion,
+                    ScreenSpaceAmbientOcclusionResources,
+                )>();
             }
             // The camera is gone; its render entity goes with it.
             None => {}

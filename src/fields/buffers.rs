@@ -19,6 +19,7 @@ use bytemuck::{Pod, Zeroable};
 use super::format::AoFieldData;
 use super::systems::ActiveAoField;
 use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
 /// One occluder as `fields.wgsl` reads it.
@@ -246,6 +247,7 @@ pub(crate) fn write_field_buffers(
     mut buffers: ResMut<FieldBuffers>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
+    memory: Res<DynamicAoGpuMemory>,
 ) {
     let buffers = buffers.as_mut();
     if buffers.dirty || buffers.cells.buffer().is_none() {
@@ -253,4 +255,12 @@ pub(crate) fn write_field_buffers(
         buffers.dirty = false;
     }
     buffers.instances.write_buffer(&device, &queue);
+    memory.report(
+        "fields",
+        [buffers.cells.buffer(), buffers.instances.buffer()]
+            .into_iter()
+            .flatten()
+            .map(|b| b.size())
+            .sum(),
+    );
 }

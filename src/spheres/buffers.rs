@@ -13,6 +13,7 @@ use bevy::render::{
 use bytemuck::{Pod, Zeroable};
 
 use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
 use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
@@ -90,6 +91,7 @@ pub(crate) fn write_sphere_buffer(
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
     mut warned: Local<bool>,
+    memory: Res<DynamicAoGpuMemory>,
 ) {
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let len = buffer.count as usize;
@@ -111,4 +113,5 @@ pub(crate) fn write_sphere_buffer(
         buffer.count = kept as u32;
     }
     buffer.buffer.write_buffer(&device, &queue);
+    memory.report("spheres", buffer.buffer.buffer().map_or(0, |b| b.size()));
 }

@@ -14,6 +14,7 @@ use bevy::render::{
     renderer::{RenderDevice, RenderQueue},
 };
 
+use crate::memory::DynamicAoGpuMemory;
 use crate::settings::DynamicAo;
 use crate::view::{DynamicAoTextures, DynamicAoView};
 
@@ -54,6 +55,12 @@ pub(crate) struct HistoryFrame<'a> {
 }
 
 impl TemporalHistory {
+    /// GPU bytes its two textures take.
+    pub fn bytes(&self) -> u64 {
+        let texel = u64::from(HISTORY_FORMAT.block_copy_size(None).unwrap_or(16));
+        2 * u64::from(self.size.x) * u64::from(self.size.y) * texel
+    }
+
     /// The history this frame reads and the one it writes.
     pub(super) fn views(&self) -> (&TextureView, &TextureView) {
         (&self.textures[self.read].1, &self.textures[1 - self.read].1)
@@ -139,7 +146,14 @@ pub(crate) fn prepare_history(
     )>,
     // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
     stale: Query<Entity, (With<TemporalHistory>, Without<DynamicAoView>)>,
+    memory: Res<DynamicAoGpuMemory>,
 ) {
+    // What last frame left; this frame's new and dropped histories count from the next.
+    let bytes = views
+        .iter()
+        .filter_map(|(.., history)| history.map(TemporalHistory::bytes))
+        .sum();
+    memory.report("temporal", bytes);
     for entity in &stale {
         commands.entity(entity).remove::<TemporalHistory>();
     }

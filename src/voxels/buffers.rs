@@ -13,6 +13,7 @@ use bevy::render::{
 use bytemuck::Zeroable;
 
 use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::memory::DynamicAoGpuMemory;
 
 use super::component::{VoxelGridReadback, grid_words};
 use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
@@ -111,6 +112,7 @@ pub(crate) fn write_voxel_buffers(
     queue: Res<RenderQueue>,
     storage_buffers: Res<RenderAssets<GpuShaderBuffer>>,
     mut warned: Local<(bool, bool, bool)>,
+    memory: Res<DynamicAoGpuMemory>,
 ) {
     let buffers = buffers.as_mut();
     let max_bytes = device.limits().max_storage_buffer_binding_size;
@@ -186,6 +188,18 @@ pub(crate) fn write_voxel_buffers(
         }));
     }
     buffers.needs_voxelizing = buffers.counts.volumes > 0;
+    memory.report(
+        "voxels",
+        [
+            buffers.triangles.buffer(),
+            buffers.volumes.buffer(),
+            buffers.grid.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|b| b.size())
+        .sum(),
+    );
 
     buffers.readback = None;
     if let Some(request) = &buffers.readback_request

@@ -13,6 +13,7 @@ use bevy::render::{
 
 use super::component::VoxelGridInfo;
 use crate::filter::OCCLUSION_PAIR_FORMAT;
+use crate::memory::DynamicAoGpuMemory;
 use crate::temporal::{HistoryFrame, TemporalHistory};
 use crate::view::{
     DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, half_size, view_size, view_texture,
@@ -70,7 +71,14 @@ pub(crate) fn prepare_voxel_textures(
     )>,
     // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
     stale: Query<Entity, (With<VoxelHistory>, Without<DynamicAoView>)>,
+    memory: Res<DynamicAoGpuMemory>,
 ) {
+    // What last frame left; this frame's new and dropped histories count from the next.
+    let bytes = views
+        .iter()
+        .filter_map(|(.., history)| history.map(|h| h.0.bytes()))
+        .sum();
+    memory.report("voxel temporal", bytes);
     for entity in &stale {
         commands.entity(entity).remove::<VoxelHistory>();
     }

@@ -231,6 +231,36 @@ fn msaa_toggles_at_runtime() {
     }
 }
 
+/// Taking `DynamicAo` off an MSAA camera leaves it lit without AO (Bevy's SSAO textures go with
+/// it: left on the view, Bevy would bind them with the multisampled prepass, which fails
+/// validation and ends the app), and putting it back brings the AO back.
+#[test]
+fn an_msaa_camera_loses_and_regains_its_ao() {
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::new(&scene, plain_ao());
+    let camera = gpu.camera;
+    let plain = gpu.frame(4);
+    gpu.app.world_mut().entity_mut(camera).insert(Msaa::Sample4);
+    let with_ao = mean_luminance(&gpu.color(4));
+    gpu.app.world_mut().entity_mut(camera).remove::<DynamicAo>();
+    let without = gpu.color(6);
+    assert!(without.iter().all(|c| c.is_finite()));
+    let without = mean_luminance(&without);
+    println!("mean luminance with AO {with_ao:.4}, without {without:.4}");
+    // Ambient light is part of the light here: AO darkens the mean by 0.0017.
+    assert!(
+        without > with_ao + 0.001,
+        "AO stayed: {without} against {with_ao} with AO"
+    );
+    gpu.app.world_mut().entity_mut(camera).insert(plain_ao());
+    let error = rmse(&plain.visibility, &gpu.frame(6).visibility);
+    assert!(error < 0.01, "AO back on the MSAA camera: RMSE {error}");
+}
+
+fn mean_luminance(image: &[Vec3]) -> f32 {
+    image.iter().map(|c| (c.x + c.y + c.z) / 3.0).sum::<f32>() / image.len() as f32
+}
+
 #[test]
 fn bevy_ssao_on_an_msaa_camera_warns_and_renders() {
     let mut gpu = Gpu::new(

@@ -36,6 +36,7 @@ mod ray_march;
 mod scenes;
 mod shared_assets;
 mod skinned;
+mod soak;
 mod spheres;
 mod temporal;
 mod voxels;
