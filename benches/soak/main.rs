@@ -31,7 +31,7 @@ fn main() {
         }
     }
     let start = std::time::Instant::now();
-    let report = run::soak(frames, 20, spheres);
+    let report = run::soak(frames, 20, spheres, run::CYCLE);
     println!("{}", report.table());
     let verdict = report.verdict();
     println!(

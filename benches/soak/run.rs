@@ -19,8 +19,15 @@ use bevy_dynamic_ao::DynamicAoGpuMemory;
 use bevy_dynamic_ao::fields::{AoFieldCache, BakeSettings};
 use bevy_dynamic_ao::prelude::*;
 
-/// Sizes the target cycles through, pixels: 64×48 first.
-const SIZES: [UVec2; 3] = [UVec2::new(64, 48), UVec2::new(80, 60), UVec2::new(48, 36)];
+/// Sizes the target cycles through, pixels, one every 400 frames: 64×48 first.
+const SIZES: [UVec2; 4] = [
+    UVec2::new(64, 48),
+    UVec2::new(80, 60),
+    UVec2::new(64, 48),
+    UVec2::new(48, 36),
+];
+/// Frames after which the schedule of the 10,000-frame benchmark repeats.
+pub const CYCLE: u32 = 1600;
 /// Occluders alive at once; the oldest goes when one more comes.
 const MAX_OCCLUDERS: usize = 6;
 
@@ -39,13 +46,17 @@ pub struct Sample {
 }
 
 /// Most the RSS may grow from the warm checkpoint to the end, bytes.
-pub const RSS_GROWTH_BOUND: u64 = 48 << 20;
+pub const RSS_GROWTH_BOUND: u64 = 8 << 20;
+/// Growth past which the run stops rather than exhaust the machine's memory, bytes.
+const RSS_STOP: u64 = 4 << 30;
 /// Most GPU bytes the plugin may hold at any checkpoint: the run's largest state (a 32³ voxel
 /// grid, six small fields, the temporal histories of an 80×60 view) takes about 0.2 MB.
-pub const GPU_BYTES_BOUND: u64 = 1 << 20;
+pub const GPU_BYTES_BOUND: u64 = 256 << 10;
 
 /// What a run's memory did.
 pub struct Verdict {
+    /// The run stopped early, its memory running away.
+    pub stopped: bool,
     /// RSS at the end less RSS at the warm checkpoint, bytes.
     pub rss_growth: u64,
     /// The largest GPU bytes at any checkpoint.
@@ -54,12 +65,15 @@ pub struct Verdict {
 
 impl Verdict {
     pub fn bounded(&self) -> bool {
-        self.rss_growth <= RSS_GROWTH_BOUND && self.gpu_peak <= GPU_BYTES_BOUND
+        !self.stopped && self.rss_growth <= RSS_GROWTH_BOUND && self.gpu_peak <= GPU_BYTES_BOUND
     }
 }
 
 impl std::fmt::Display for Verdict {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.stopped {
+            write!(f, "stopped early, ")?;
+        }
         write!(
             f,
             "rss_growth_mib={:.1} (bound {}) gpu_peak_bytes={} (bound {GPU_BYTES_BOUND})",
@@ -72,14 +86,25 @@ impl std::fmt::Display for Verdict {
 
 /// Every checkpoint of a run.
 pub struct Report {
+    /// Frames after which the schedule repeats: every change's period divides it, so each
+    /// combination of settings, MSAA, size, volume and occluders that ever occurs has occurred
+    /// once this many frames in, and what a later repetition adds to memory is a leak, not a
+    /// first use (a pipeline compiled, a pool grown).
+    pub cycle: u32,
+    /// Whether the run stopped early because the process grew past 4 GiB.
+    pub stopped: bool,
     pub samples: Vec<Sample>,
 }
 
 impl Report {
-    /// The checkpoint after the first fifth of the run, when every schedule has turned at least
-    /// once and caches and pools are warm: growth is measured from here.
+    /// The first checkpoint after one whole cycle (the last one in a shorter run): growth is
+    /// measured from here.
     pub fn warm(&self) -> Sample {
-        self.samples[self.samples.len() / 5]
+        *self
+            .samples
+            .iter()
+            .find(|s| s.frame >= self.cycle)
+            .unwrap_or(&self.end())
     }
 
     pub fn end(&self) -> Sample {
@@ -88,6 +113,7 @@ impl Report {
 
     pub fn verdict(&self) -> Verdict {
         Verdict {
+            stopped: self.stopped,
             rss_growth: self.end().rss.saturating_sub(self.warm().rss),
             gpu_peak: self.samples.iter().map(|s| s.gpu).max().unwrap_or(0),
         }
@@ -145,10 +171,11 @@ fn target(world: &mut World, size: UVec2) -> RenderTarget {
     RenderTarget::Image(world.resource_mut::<Assets<Image>>().add(image).into())
 }
 
-/// The camera's settings at step `step` of the settings schedule: every preset, with and without
-/// each far-field term, and two image-space techniques on their own; the sphere term only where
-/// `spheres` allows it.
+/// The camera's settings at step `step` (of 16, then again) of the settings schedule: every
+/// preset, with and without each far-field term, and two image-space techniques on their own;
+/// the sphere term only where `spheres` allows it.
 fn settings(step: u32, spheres: bool) -> DynamicAo {
+    let step = step % 16;
     let preset = AoPreset::ALL[step as usize % AoPreset::ALL.len()];
     let mut ao = DynamicAo::from_preset(preset);
     match (step / 4) % 4 {
@@ -202,9 +229,16 @@ fn spawn_occluder(world: &mut World, i: u32, material: &Handle<StandardMaterial>
     entity.id()
 }
 
-/// Runs `frames` frames and samples memory `checkpoints` times, evenly (the first at frame 0);
-/// the camera draws sphere proxies only if `spheres`.
-pub fn soak(frames: u32, checkpoints: u32, spheres: bool) -> Report {
+/// Runs `frames` frames of a schedule that repeats every `cycle` frames (a multiple of 80) and
+/// samples memory `checkpoints` times, evenly (the first at frame 0); the camera draws sphere
+/// proxies only if `spheres`.
+///
+/// In steps of a sixteenth of the cycle: the settings change every step (16 settings per
+/// cycle); an occluder spawns every 2/5 step (kinds in turn) and the oldest of seven despawns;
+/// the voxel volume comes or goes and the target changes size every 4 steps (4 sizes); MSAA
+/// toggles and `DynamicAo` goes for a tenth of a step every 8 steps.
+pub fn soak(frames: u32, checkpoints: u32, spheres: bool, cycle: u32) -> Report {
+    let step = cycle / 16;
     let mut app = new_app();
     let world = app.world_mut();
     let material = world
@@ -251,6 +285,7 @@ pub fn soak(frames: u32, checkpoints: u32, spheres: bool) -> Report {
     let mut occluders: Vec<Entity> = Vec::new();
     let mut volume: Option<Entity> = None;
     let mut spawned = 0;
+    let mut stopped = false;
     for frame in 0..=frames {
         if frame % every == 0 || frame == frames {
             let world = app.world_mut();
@@ -265,15 +300,29 @@ pub fn soak(frames: u32, checkpoints: u32, spheres: bool) -> Report {
         if frame == frames {
             break;
         }
+        if rss_bytes() > samples[0].rss + RSS_STOP {
+            println!(
+                "soak: stopped at frame {frame}: the process grew by more than {} GiB",
+                RSS_STOP >> 30
+            );
+            samples.push(Sample {
+                frame,
+                ..*samples.last().expect("frame 0 was sampled")
+            });
+            samples.last_mut().expect("just pushed").rss = rss_bytes();
+            stopped = true;
+            break;
+        }
         let world = app.world_mut();
-        if frame % 40 == 0 {
+        let phase = frame % cycle;
+        if frame % (step * 2 / 5) == 0 {
             occluders.push(spawn_occluder(world, spawned, &material));
             spawned += 1;
             if occluders.len() > MAX_OCCLUDERS {
                 world.despawn(occluders.remove(0));
             }
         }
-        if frame % 300 == 100 {
+        if phase % (4 * step) == step {
             match volume.take() {
                 Some(entity) => {
                     world.despawn(entity);
@@ -295,17 +344,17 @@ pub fn soak(frames: u32, checkpoints: u32, spheres: bool) -> Report {
                 }
             }
         }
-        if frame % 250 == 200 {
-            let size = SIZES[(frame / 250 + 1) as usize % SIZES.len()];
+        if phase % (4 * step) == 2 * step {
+            let size = SIZES[(phase / (4 * step) + 1) as usize % SIZES.len()];
             let target = self::target(world, size);
             world.entity_mut(camera).insert(target);
         }
-        if frame % 100 == 50 {
+        if phase % step == step / 2 {
             world
                 .entity_mut(camera)
-                .insert(settings(frame / 100 + 1, spheres));
+                .insert(settings(phase / step + 1, spheres));
         }
-        if frame % 350 == 170 {
+        if phase % (8 * step) == 3 * step + step * 7 / 10 {
             let mut msaa = world.get_mut::<Msaa>(camera).expect("the camera has Msaa");
             *msaa = if *msaa == Msaa::Off {
                 Msaa::Sample4
@@ -313,15 +362,19 @@ pub fn soak(frames: u32, checkpoints: u32, spheres: bool) -> Report {
                 Msaa::Off
             };
         }
-        if frame % 500 == 420 {
+        if phase % (8 * step) == 6 * step + step / 5 {
             world.entity_mut(camera).remove::<DynamicAo>();
         }
-        if frame % 500 == 430 {
+        if phase % (8 * step) == 6 * step + step * 3 / 10 {
             world
                 .entity_mut(camera)
-                .insert(settings(frame / 100, spheres));
+                .insert(settings(phase / step, spheres));
         }
         app.update();
     }
-    Report { samples }
+    Report {
+        cycle,
+        stopped,
+        samples,
+    }
 }

@@ -298,3 +298,83 @@ fn active_extent(gpu: &mut Gpu, entity: Entity) -> Vec3 {
         .get(&active.field)
         .map_or(Vec3::ZERO, |f| f.half_extent / active.baked_scale)
 }
+
+/// Sphere occluders and voxel volumes follow their components: a `SphereOccluder` given to a box,
+/// taken away and given back, then the box despawned; a `VoxelAoVolume` spawned and despawned.
+/// Each change shows on the next frames, exactly as the state it returns to looked.
+#[test]
+fn sphere_occluders_and_voxel_volumes_follow_their_components() {
+    let scene = scenes::cube_on_plane().with(
+        Cuboid::new(0.6, 0.6, 0.6),
+        Transform::from_xyz(1.2, 0.3, -0.6),
+    );
+    let far_only = |spheres: bool| DynamicAo {
+        technique: AoTechnique::Off,
+        spheres,
+        fields: false,
+        voxels: !spheres,
+        ..plain_ao()
+    };
+    let mut gpu = Gpu::new(&scene, far_only(true));
+    let occluder = {
+        let world = gpu.app.world_mut();
+        let mut boxes = world.query::<(Entity, &Transform)>();
+        boxes
+            .iter(world)
+            .find(|(_, t)| t.translation.x > 1.0)
+            .map(|(e, _)| e)
+            .expect("the box")
+    };
+    let close = |a: &[f32], b: &[f32]| crate::harness::largest_difference(a, b);
+    let none = gpu.frame(4).visibility;
+    gpu.app
+        .world_mut()
+        .entity_mut(occluder)
+        .insert(SphereOccluder::default());
+    let with = gpu.frame(4).visibility;
+    assert!(close(&with, &none) > 0.05, "the proxies cast nothing");
+    gpu.app
+        .world_mut()
+        .entity_mut(occluder)
+        .remove::<SphereOccluder>();
+    let removed = close(&gpu.frame(4).visibility, &none);
+    assert!(
+        removed < 1e-5,
+        "SphereOccluder taken away: off by {removed}"
+    );
+    gpu.app
+        .world_mut()
+        .entity_mut(occluder)
+        .insert(SphereOccluder::default());
+    let back = close(&gpu.frame(4).visibility, &with);
+    assert!(back < 1e-5, "SphereOccluder given back: off by {back}");
+
+    gpu.set_ao(|ao| *ao = far_only(false));
+    let no_volume = gpu.frame(4).visibility;
+    let volume = gpu
+        .app
+        .world_mut()
+        .spawn((
+            Transform::from_xyz(0.0, 1.0, 0.0),
+            VoxelAoVolume {
+                half_extents: Vec3::new(2.5, 1.0, 2.5),
+                resolution: 64,
+                ..default()
+            },
+        ))
+        .id();
+    let voxels = gpu.frame(4).visibility;
+    assert!(
+        close(&voxels, &no_volume) > 0.05,
+        "the volume casts nothing"
+    );
+    gpu.app.world_mut().despawn(volume);
+    let gone = close(&gpu.frame(4).visibility, &no_volume);
+    assert!(gone < 1e-5, "volume despawned: off by {gone}");
+
+    // The box despawned with its occluder: the spheres' image is the one without it.
+    gpu.set_ao(|ao| *ao = far_only(true));
+    gpu.app.world_mut().despawn(occluder);
+    let despawned = close(&gpu.frame(4).visibility, &none);
+    assert!(despawned < 1e-5, "occluder despawned: off by {despawned}");
+}

@@ -33,6 +33,7 @@ mod models;
 mod near_field;
 mod presets;
 mod ray_march;
+mod real_assets;
 mod scenes;
 mod shared_assets;
 mod skinned;
