@@ -6,7 +6,7 @@
 
 use bevy::app::{App, SubApp};
 use bevy::ecs::resource::Resource;
-use bevy::log::error;
+use bevy::log::{error, warn};
 use bevy::render::{
     RenderApp,
     render_resource::DownlevelFlags,
@@ -87,9 +87,27 @@ pub(crate) fn fit_storage_binding(len: usize, item_bytes: usize, max_binding: u6
     len.min(usize::try_from(most).unwrap_or(usize::MAX))
 }
 
+/// How many of `len` items of type `T` one storage binding of at most `max_binding` bytes holds;
+/// when fewer than `len`, warns once per `warned`, naming `what`, the limit and the sizes.
+pub(crate) fn cap_to_storage_binding<T>(
+    what: &str,
+    len: usize,
+    max_binding: u64,
+    warned: &mut bool,
+) -> usize {
+    let kept = fit_storage_binding(len, size_of::<T>(), max_binding);
+    if kept < len && !std::mem::replace(warned, true) {
+        warn!(
+            "{}",
+            storage_binding_warning(what, len, kept, size_of::<T>(), max_binding)
+        );
+    }
+    kept
+}
+
 /// The warning for `len` items of `item_bytes` of which only `kept` fit one storage binding:
 /// names the limit and the sizes, and what is left out.
-pub(crate) fn storage_binding_warning(
+fn storage_binding_warning(
     what: &str,
     len: usize,
     kept: usize,

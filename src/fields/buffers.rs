@@ -18,7 +18,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::format::AoFieldData;
 use super::systems::ActiveAoField;
-use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
@@ -221,20 +221,13 @@ pub(crate) fn extract_fields(
     }
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let len = buffers.instances.len();
-    let kept = fit_storage_binding(len, size_of::<FieldInstance>(), max_binding);
+    let kept = cap_to_storage_binding::<FieldInstance>(
+        "AoField occluders",
+        len,
+        max_binding,
+        &mut warned_instances,
+    );
     if kept < len {
-        if !std::mem::replace(&mut *warned_instances, true) {
-            warn!(
-                "{}",
-                storage_binding_warning(
-                    "AoField occluders",
-                    len,
-                    kept,
-                    size_of::<FieldInstance>(),
-                    max_binding
-                )
-            );
-        }
         buffers.instances.truncate(kept);
     }
     buffers.count = buffers.instances.len() as u32;

@@ -2,7 +2,6 @@
 
 use bevy::camera::visibility::RenderLayers;
 use bevy::ecs::prelude::*;
-use bevy::log::warn;
 use bevy::math::{UVec4, Vec4};
 use bevy::render::{
     Extract,
@@ -12,7 +11,7 @@ use bevy::render::{
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
@@ -95,20 +94,13 @@ pub(crate) fn write_sphere_buffer(
 ) {
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let len = buffer.count as usize;
-    let kept = fit_storage_binding(len, size_of::<GpuSphere>(), max_binding);
+    let kept = cap_to_storage_binding::<GpuSphere>(
+        "SphereOccluder proxies",
+        len,
+        max_binding,
+        &mut warned,
+    );
     if kept < len {
-        if !std::mem::replace(&mut *warned, true) {
-            warn!(
-                "{}",
-                storage_binding_warning(
-                    "SphereOccluder proxies",
-                    len,
-                    kept,
-                    size_of::<GpuSphere>(),
-                    max_binding
-                )
-            );
-        }
         buffer.buffer.truncate(kept.max(1));
         buffer.count = kept as u32;
     }

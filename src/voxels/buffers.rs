@@ -12,7 +12,7 @@ use bevy::render::{
 };
 use bytemuck::Zeroable;
 
-use crate::capabilities::{fit_storage_binding, storage_binding_warning};
+use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
 
 use super::component::{VoxelGridReadback, grid_words};
@@ -148,21 +148,13 @@ pub(crate) fn write_voxel_buffers(
         buffers.counts.triangles = buffers.triangles.len() as u32;
     }
     let len = buffers.triangles.len();
-    let kept_triangles = fit_storage_binding(len, size_of::<GridTriangle>(), max_bytes);
+    let kept_triangles = cap_to_storage_binding::<GridTriangle>(
+        "VoxelAoVolume triangles",
+        len,
+        max_bytes,
+        &mut warned.2,
+    );
     if kept_triangles < len {
-        if !warned.2 {
-            warned.2 = true;
-            warn!(
-                "{}",
-                storage_binding_warning(
-                    "VoxelAoVolume triangles",
-                    len,
-                    kept_triangles,
-                    size_of::<GridTriangle>(),
-                    max_bytes
-                )
-            );
-        }
         buffers.triangles.truncate(kept_triangles);
         buffers.counts.triangles = kept_triangles as u32;
     }
