@@ -22,7 +22,6 @@ mod common;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::DiagnosticsStore;
@@ -238,11 +237,7 @@ fn run(config: &Config, size: UVec2, frames: u32, adapter: &mut String) -> Row {
         DynamicAoPlugin,
         RenderDiagnosticsPlugin,
     ));
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    common::finish_plugins(&mut app);
     let info = app.world().get_resource::<RenderAdapterInfo>().or_else(|| {
         app.get_sub_app(bevy::render::RenderApp)
             .and_then(|render| render.world().get_resource::<RenderAdapterInfo>())

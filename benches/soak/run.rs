@@ -10,7 +10,6 @@
 
 use std::time::Duration;
 
-use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
@@ -158,11 +157,7 @@ fn new_app() -> App {
         )))
         // Fields bake in memory only: the run must not grow a cache folder.
         .insert_resource(AoFieldCache { folder: None });
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    crate::common::finish_plugins(&mut app);
     app
 }
 

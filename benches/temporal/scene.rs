@@ -7,7 +7,6 @@ mod common;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
@@ -30,11 +29,7 @@ pub fn new_app() -> App {
         .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(
             FRAME_TIME,
         )));
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    common::finish_plugins(&mut app);
     app
 }
 

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use bevy::app::{PluginsState, ScheduleRunnerPlugin};
+use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState, RecursiveDependencyLoadState};
 use bevy::gltf::{Gltf, GltfMesh};
 use bevy::math::Affine3A;
@@ -132,11 +132,7 @@ fn main() {
         ScheduleRunnerPlugin::run_loop(Duration::ZERO),
     ));
     // The app is driven by hand below, so it finishes its plugins itself (as `App::run` would).
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    common::finish_plugins(&mut app);
     let file = options
         .scene
         .file_name()

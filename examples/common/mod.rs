@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use bevy::app::ScheduleRunnerPlugin;
+use bevy::app::{PluginsState, ScheduleRunnerPlugin};
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::diagnostic::FrameCount;
@@ -110,6 +110,17 @@ pub fn headless_plugins() -> impl PluginGroup {
             ..default()
         })
         .disable::<WinitPlugin>()
+}
+
+/// Finishes building an app that is driven by hand (`app.update()` in a loop) rather than by
+/// `App::run`: waits for plugins that load asynchronously (the renderer), then runs their
+/// `finish` and `cleanup`, as `App::run` would.
+pub fn finish_plugins(app: &mut App) {
+    while app.plugins_state() == PluginsState::Adding {
+        bevy::tasks::tick_global_task_pools_on_main_thread();
+    }
+    app.finish();
+    app.cleanup();
 }
 
 /// The crate's `assets/` folder, wherever the example binary is started from (Bevy's default is

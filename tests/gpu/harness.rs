@@ -3,7 +3,6 @@
 
 use std::sync::{Arc, Mutex, OnceLock};
 
-use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
@@ -91,6 +90,16 @@ impl Frame {
     /// Pixels where the front layer saw geometry.
     pub fn geometry_mask(&self) -> Vec<bool> {
         self.nd.front.iter().map(|t| t.depth > 0.0).collect()
+    }
+
+    /// The visibility of the pixels where the front layer saw geometry.
+    pub fn geometry_visibility(&self) -> Vec<f32> {
+        self.visibility
+            .iter()
+            .zip(&self.nd.front)
+            .filter(|(_, t)| t.depth > 0.0)
+            .map(|(v, _)| *v)
+            .collect()
     }
 
     /// World position of the front-layer surface at pixel `i` (None where empty).
@@ -197,11 +206,7 @@ impl Gpu {
             )),
             None => app.add_plugins((plugins, DynamicAoPlugin)),
         };
-        while app.plugins_state() == PluginsState::Adding {
-            bevy::tasks::tick_global_task_pools_on_main_thread();
-        }
-        app.finish();
-        app.cleanup();
+        common::finish_plugins(&mut app);
 
         let world = app.world_mut();
         let material = world

@@ -117,14 +117,7 @@ fn every_shared_model_goes_through_every_technique() {
                     });
                     frame = run.gpu.frame(30);
                 }
-                let mask = frame.geometry_mask();
-                let seen: Vec<f32> = frame
-                    .visibility
-                    .iter()
-                    .zip(&mask)
-                    .filter(|(_, m)| **m)
-                    .map(|(v, _)| *v)
-                    .collect();
+                let seen = frame.geometry_visibility();
                 assert!(seen.len() > 500, "{file}, {name}: {} pixels", seen.len());
                 assert!(
                     frame

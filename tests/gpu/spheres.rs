@@ -215,14 +215,7 @@ fn bad_occluder_meshes_warn_and_fall_back() {
     // the sanitized ball (count 0 → 1) one box.
     assert!(counts.iter().all(|c| *c <= 4), "{counts:?}");
     assert!(counts.contains(&1), "{counts:?}");
-    let mask = frame.geometry_mask();
-    let seen: Vec<f32> = frame
-        .visibility
-        .iter()
-        .zip(&mask)
-        .filter(|(_, m)| **m)
-        .map(|(v, _)| *v)
-        .collect();
+    let seen = frame.geometry_visibility();
     assert!(
         seen.iter()
             .all(|v| v.is_finite() && (0.0..=1.0).contains(v))
