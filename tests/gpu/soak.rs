@@ -15,7 +15,7 @@ fn a_thousand_frames_of_changes_stay_bounded() {
     let _turn = GPU_TURN
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
-    // The schedule repeats every 400 frames: growth is measured over the last 600.
+    // The schedule repeats every 400 frames: growth is measured over the last 500.
     let report = run::soak(1000, 20, false, run::CYCLE / 4);
     println!("{}", report.table());
     let verdict = report.verdict();
