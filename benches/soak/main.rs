@@ -5,8 +5,7 @@
 //! code 1 when either passes its bound.
 //!
 //! `cargo bench --profile dev --bench soak` (`-- --frames N` for another length,
-//! `-- --without-spheres` to keep the sphere term off: on lavapipe every draw of the sphere
-//! splat pass leaks about 6.6 MB, see BENCHMARKS.md). CI runs 1,000 frames as the GPU test
+//! `-- --without-spheres` to keep the sphere term off). CI runs 1,000 frames as the GPU test
 //! `soak::a_thousand_frames_of_changes_stay_bounded`.
 
 #[path = "../../examples/common/mod.rs"]

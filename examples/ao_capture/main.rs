@@ -6,8 +6,11 @@
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
-//!     [--out-color COLOR.png]
+//!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png]
 //! ```
+//!
+//! `--out-color` writes the lit image (ambient light as most of the light, so the AO shows);
+//! `--compare` writes it beside Bevy's SSAO and no AO (`compare.rs`).
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
 //! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
@@ -27,6 +30,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod compare;
 #[path = "../common/far_terms.rs"]
 mod far_terms;
 mod options;
@@ -108,6 +112,7 @@ fn main() {
         readback: None,
         visibility: None,
         color_done: false,
+        compare: None,
         failure: None,
         volume: None,
         stage_start: 0,
@@ -144,6 +149,8 @@ struct Capture {
     readback: Option<AoReadback>,
     visibility: Option<Vec<f32>>,
     color_done: bool,
+    /// `--compare`: the Bevy's-SSAO and no-AO views beside ours.
+    compare: Option<compare::Compare>,
     failure: Option<String>,
     /// The voxel volume of `--technique voxels`, once the view's surfaces are known.
     volume: Option<Entity>,
@@ -171,7 +178,7 @@ fn scene_ready(
     mut commands: Commands,
     mut capture: ResMut<Capture>,
     children: Query<&Children>,
-    cameras: Query<(), With<Camera3d>>,
+    cameras: Query<Option<&Projection>, With<Camera3d>>,
     meshes: Query<(), With<Mesh3d>>,
     players: Query<Entity, With<AnimationPlayer>>,
     gltfs: Res<Assets<Gltf>>,
@@ -208,7 +215,27 @@ fn scene_ready(
         None,
     ));
     let readback = AoReadback::new(&mut images, size);
+    if let Some(out) = options.compare.clone() {
+        let projection = cameras
+            .get(camera)
+            .ok()
+            .flatten()
+            .cloned()
+            .unwrap_or_default();
+        capture.compare = Some(compare::Compare::spawn_peers(
+            &mut commands,
+            &mut images,
+            camera,
+            projection,
+            target.clone(),
+            size,
+            compare::lit(),
+            out,
+        ));
+    }
+    let options = &capture.options;
     commands.entity(camera).insert((
+        compare::lit(),
         RenderTarget::Image(target.into()),
         Msaa::from_samples(options.msaa),
         DynamicAo {
@@ -418,7 +445,22 @@ fn drive(
         }
         Stage::Rendering { .. } => {}
         Stage::Reading => {
-            let color_ready = capture.options.out_color.is_none() || capture.color_done;
+            let out_color = capture.options.out_color.as_ref();
+            let compared = match capture.compare.as_ref().map(|c| c.finish(out_color)) {
+                None => true,
+                Some(None) => false,
+                Some(Some(Ok(()))) => true,
+                Some(Some(Err(failure))) => {
+                    eprintln!("ao_capture: {failure}");
+                    exit.write(AppExit::error());
+                    return;
+                }
+            };
+            // With `--compare` its screenshot of our target also gives `--out-color`.
+            let color_ready = compared
+                && (capture.options.out_color.is_none()
+                    || capture.color_done
+                    || capture.compare.is_some());
             if let (Some(visibility), true) = (capture.visibility.as_ref(), color_ready) {
                 let options = &capture.options;
                 if let Err(err) =
@@ -467,6 +509,11 @@ fn store_visibility(
     );
     capture.visibility = Some(common::unpad_f32(&readback.data, w, h, 1));
     commands.entity(readback.entity).despawn();
+    if let Some(compare) = &capture.compare {
+        // Its screenshot of our target also writes `--out-color` (one screenshot per target).
+        compare.capture(&mut commands);
+        return;
+    }
     // The lit image is captured once the AO is, from the same frame onwards.
     if let Some(out) = capture.options.out_color.clone()
         && let Some(RenderTarget::Image(target)) = cameras.iter().next()

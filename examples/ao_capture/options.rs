@@ -11,7 +11,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -91,6 +91,8 @@ pub struct Options {
     pub msaa: u32,
     pub out_ao: PathBuf,
     pub out_color: Option<PathBuf>,
+    /// Where ours, Bevy's SSAO and no AO go, lit, side by side.
+    pub compare: Option<PathBuf>,
 }
 
 impl Options {
@@ -117,7 +119,7 @@ impl Options {
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
-        let (mut out_ao, mut out_color) = (None, None);
+        let (mut out_ao, mut out_color, mut compare) = (None, None, None);
         let mut msaa = 1;
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -210,6 +212,7 @@ impl Options {
                 }
                 "--out-ao" => out_ao = Some(PathBuf::from(value()?)),
                 "--out-color" => out_color = Some(PathBuf::from(value()?)),
+                "--compare" => compare = Some(PathBuf::from(value()?)),
                 "--help" | "-h" => {
                     println!("{USAGE}");
                     return Ok(None);
@@ -224,6 +227,11 @@ impl Options {
                     "{flag} is at most {MAX_SIZE} pixels (a GPU texture limit)"
                 ));
             }
+        }
+        if msaa > 1 && compare.is_some() {
+            return Err(
+                "--compare needs --msaa 1: Bevy's SSAO does not run on MSAA cameras".into(),
+            );
         }
         if msaa > 1 && technique.is_some_and(|(t, _)| t == AoTechnique::BevySsao) {
             return Err(
@@ -271,6 +279,7 @@ impl Options {
             time,
             out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,
             out_color,
+            compare,
         }))
     }
 }

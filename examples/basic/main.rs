@@ -151,22 +151,7 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
         if keys.just_pressed(KeyCode::KeyL) {
             ao.near_field.back_layer = !ao.near_field.back_layer;
         }
-        for (key, preset) in [
-            KeyCode::Digit1,
-            KeyCode::Digit2,
-            KeyCode::Digit3,
-            KeyCode::Digit4,
-        ]
-        .into_iter()
-        .zip(AoPreset::ALL)
-        {
-            if keys.just_pressed(key) {
-                *ao = DynamicAo {
-                    debug_view: ao.debug_view,
-                    ..DynamicAo::from_preset(preset)
-                };
-            }
-        }
+        common::preset_keys(&keys, &mut ao);
     }
 }
 

@@ -308,6 +308,26 @@ pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dyna
     }
 }
 
+/// Keys 1–4 put the preset of that level on `ao` (`AoPreset::ALL`, low to ultra), keeping the
+/// debug view as it is.
+pub fn preset_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dynamic_ao::DynamicAo) {
+    use bevy_dynamic_ao::{AoPreset, DynamicAo};
+    let digits = [
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+    ];
+    for (key, preset) in digits.into_iter().zip(AoPreset::ALL) {
+        if keys.just_pressed(key) {
+            *ao = DynamicAo {
+                debug_view: ao.debug_view,
+                ..DynamicAo::from_preset(preset)
+            };
+        }
+    }
+}
+
 /// Marker of the on-screen help line.
 #[derive(Component)]
 pub struct HelpLine;

@@ -4,6 +4,7 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::nd_buffer::linear_depth
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
@@ -24,10 +25,9 @@ fn input_value(q: vec2<i32>) -> vec2<f32> {
 #endif
 }
 
-// Distance in front of the camera for a reverse-Z depth, metres.
-fn linear_depth(d: f32) -> f32 {
-    let p = view.view_from_clip * vec4<f32>(0.0, 0.0, d, 1.0);
-    return -p.z / p.w;
+// Distance in front of the camera for a reverse-Z depth, metres: the same at every pixel.
+fn depth_ahead(d: f32) -> f32 {
+    return linear_depth(view, vec2<f32>(0.5), d);
 }
 
 fn blur(pixel: vec2<i32>, step: vec2<i32>) {
@@ -40,7 +40,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         textureStore(output, pixel, vec4<f32>(0.0));
         return;
     }
-    let z0 = linear_depth(center_depth);
+    let z0 = depth_ahead(center_depth);
 #ifdef TWO_CHANNELS
     // The voxel term's (see `DynamicAoUniform::voxel_blur_radius`).
     let radius = i32(settings.voxel_blur_radius);
@@ -60,7 +60,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         if d <= 0.0 {
             continue;
         }
-        let dz = (linear_depth(d) - z0) / z0 * settings.blur_sharpness;
+        let dz = (depth_ahead(d) - z0) / z0 * settings.blur_sharpness;
         let w = exp(-f32(i * i) * falloff - dz * dz);
         sum += w * input_value(q);
         weights += w;

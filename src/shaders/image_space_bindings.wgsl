@@ -6,7 +6,7 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
-#import bevy_dynamic_ao::nd_buffer::decode_normal
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, position_in_view}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
@@ -18,8 +18,7 @@
 
 // View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
 fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
-    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return p.xyz / p.w;
+    return position_in_view(view, uv, depth);
 }
 
 // View-space position of the centre of `pixel` at reverse-Z depth `depth`.

@@ -24,6 +24,18 @@ fn world_position(view: View, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> 
     return world.xyz / world.w;
 }
 
+// View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
+fn position_in_view(view: View, uv: vec2<f32>, depth: f32) -> vec3<f32> {
+    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+// Distance in front of the camera along its view axis of the point at viewport coordinates `uv`
+// and reverse-Z depth `depth`, metres.
+fn linear_depth(view: View, uv: vec2<f32>, depth: f32) -> f32 {
+    return -position_in_view(view, uv, depth).z;
+}
+
 // Distance in front of the camera along its view axis, metres.
 fn view_depth(view: View, world_position: vec3<f32>) -> f32 {
     return -(view.view_from_world * vec4<f32>(world_position, 1.0)).z;

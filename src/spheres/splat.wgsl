@@ -35,6 +35,20 @@ struct Proxy {
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
     @location(0) @interpolate(flat) proxy: u32,
+    // The settings the fragment stage branches on (`ViewSettings`): x R, y the near field's
+    // reach, z 1 where the back layer is drawn, w 1 for an orthographic view. They reach it as
+    // flat inputs, not as uniform reads: lavapipe (Mesa 22.3) folds uniform values that decide
+    // branches into the fragment shader and, for this shader, compiled and kept a new variant at
+    // every draw, about 6.6 MB and 25 ms each (the soak benchmark's growth, BENCHMARKS.md).
+    @location(1) @interpolate(flat) view_settings: vec4<f32>,
+}
+
+// The view's settings as the fragment stage reads them (`VertexOutput::view_settings`).
+struct ViewSettings {
+    radius: f32,
+    near: f32,
+    use_back: bool,
+    orthographic: bool,
 }
 
 // The screen rectangle (NDC min.xy, max.xy) of the sphere of radius `reach` around the view-space
@@ -103,20 +117,26 @@ fn vertex(
     var out: VertexOutput;
     out.position = vec4<f32>(mix(lo, hi, corners[vertex_index]), 0.0, 1.0);
     out.proxy = instance_index;
+    out.view_settings = vec4<f32>(
+        settings.radius,
+        settings.near_field_radius,
+        f32(settings.seen_back_layer != 0u),
+        f32(view.clip_from_view[3][3] == 1.0),
+    );
     return out;
 }
 
 // How much of the near field's share the ND-buffer holds at `x`.
-fn held(x: vec3<f32>, tolerance: f32) -> f32 {
-    return nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, x, tolerance);
+fn held(vs: ViewSettings, x: vec3<f32>, tolerance: f32) -> f32 {
+    return nd_buffer_holds(view, front_depth, back_depth, vs.use_back, x, tolerance);
 }
 
 // How fully the camera sees a face with unit normal `f` at `x`: image-space samples are spread
 // over the screen, so a face seen edge-on gets almost none of them, even where the ND-buffer
 // holds it.
-fn seen_face(x: vec3<f32>, f: vec3<f32>) -> f32 {
+fn seen_face(vs: ViewSettings, x: vec3<f32>, f: vec3<f32>) -> f32 {
     var to_eye = view.world_from_view[2].xyz;
-    if view.clip_from_view[3][3] != 1.0 {
+    if !vs.orthographic {
         to_eye = view.world_position - x;
     }
     return clamp(abs(dot(normalize(to_eye), f)) / 0.3, 0.0, 1.0);
@@ -127,8 +147,8 @@ fn seen_face(x: vec3<f32>, f: vec3<f32>) -> f32 {
 // the directions the near part leaves open (the two parts cover different directions, so they
 // join back into the whole as 1 − (1 − x)(1 − y)). Where the far field counts every occluder, y is
 // all of it.
-fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
-    let near = settings.near_field_radius;
+fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
+    let near = vs.near;
     let tolerance = 0.1 * near;
     let centre = proxy.centre_bound.xyz;
     if proxy.kind.x != 0.0 {
@@ -137,7 +157,7 @@ fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2
         if near > 0.0 {
             let inner = sphere_occlusion_within(p, n, centre, radius, near);
             return vec2<f32>(
-                inner * (1.0 - held(centre, radius + tolerance)),
+                inner * (1.0 - held(vs, centre, radius + tolerance)),
                 share_beyond(all, inner),
             );
         }
@@ -179,7 +199,7 @@ fn proxy_occlusion(proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2
             }
             let inner = face_occlusion(p, n, face_centre, f, b, c, select(near, min(near, reach), reach > 0.0));
             if inner.occlusion > 0.0 {
-                occlusion.x += inner.occlusion * (1.0 - held(inner.centre, tolerance) * seen_face(inner.centre, f));
+                occlusion.x += inner.occlusion * (1.0 - held(vs, inner.centre, tolerance) * seen_face(vs, inner.centre, f));
             }
             if !one_part {
                 let all = face_occlusion(p, n, face_centre, f, b, c, reach).occlusion;
@@ -202,7 +222,13 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     let proxy = proxies[in.proxy];
     let size = vec2<f32>(textureDimensions(front_depth));
     let p = world_position(view, pixel, size, depth);
-    var reach = settings.radius;
+    let vs = ViewSettings(
+        in.view_settings.x,
+        in.view_settings.y,
+        in.view_settings.z != 0.0,
+        in.view_settings.w != 0.0,
+    );
+    var reach = vs.radius;
     if proxy.kind.y > 0.0 {
         // Eq. 5: cut off beyond d_far, unlimited within.
         if distance(p, proxy.centre_bound.xyz) > proxy.kind.y {
@@ -210,7 +236,7 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         }
         reach = 0.0;
     }
-    let occlusion = clamp(proxy_occlusion(proxy, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
+    let occlusion = clamp(proxy_occlusion(vs, proxy, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
     // Blue multiplies the visibilities of skinned meshes' proxies alone, alpha keeps the largest
     // of their occlusions (blended with max): compose takes their union.
     let articulated = select(0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y), proxy.kind.z > 0.5);

@@ -6,7 +6,7 @@
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::decode_normal
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
 
 struct TemporalUniform {
     // 1: every history is dropped this frame.
@@ -56,11 +56,6 @@ const WINDOW: i32 = 2;
 const CLAMPED_FRAMES: f32 = 4.0;
 const CUT: f32 = 0.03;
 
-fn linear_depth(uv: vec2<f32>, depth: f32) -> f32 {
-    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return -p.z / p.w;
-}
-
 // Whether a point at linear depth `other_z` with normal `other_n` lies on the surface at `z`, `n`.
 fn same_surface(other_z: f32, other_n: vec3<f32>, z: f32, n: vec3<f32>) -> bool {
     return abs(other_z - z) <= DEPTH_TOLERANCE * z && dot(other_n, n) >= NORMAL_AGREEMENT;
@@ -102,19 +97,11 @@ fn store(texel: vec2<i32>, value: vec2<f32>, depth: f32, frames: f32, normal: ve
     textureStore(occlusion, texel, vec4<f32>(value, 0.0, 0.0));
 }
 
-#ifdef PAIR
 // The voxel term clamps into the range of this frame's values in the 3 × 3 texels around it,
 // widened by CLAMP_MARGIN, and cuts at any move: the window mean's box biased its converged
 // value at the voxel grid's steps (RMSE against 64 rays 0.010 with the range, 0.033 with the
 // mean, on the test's room corner).
-fn clamp_bounds(
-    texel: vec2<i32>,
-    dims: vec2<i32>,
-    full: vec2<i32>,
-    z: f32,
-    n: vec3<f32>,
-    value: vec2<f32>,
-) -> array<vec2<f32>, 2> {
+fn range_bounds(texel: vec2<i32>, dims: vec2<i32>, value: vec2<f32>) -> array<vec2<f32>, 2> {
     var lo = value;
     var hi = value;
     for (var dy = -1; dy <= 1; dy++) {
@@ -127,19 +114,14 @@ fn clamp_bounds(
     return array<vec2<f32>, 2>(lo - vec2<f32>(CLAMP_MARGIN), hi + vec2<f32>(CLAMP_MARGIN));
 }
 
-fn cut() -> f32 {
-    return 0.0;
-}
-#else
 // Mean of this frame's values on the same surface in the window, give or take GAMMA standard
 // errors of it and CLAMP_MARGIN.
-fn clamp_bounds(
+fn mean_bounds(
     texel: vec2<i32>,
     dims: vec2<i32>,
     full: vec2<i32>,
     z: f32,
     n: vec3<f32>,
-    value: vec2<f32>,
 ) -> array<vec2<f32>, 2> {
     var sum = vec2<f32>(0.0);
     var sum_sq = vec2<f32>(0.0);
@@ -151,7 +133,7 @@ fn clamp_bounds(
             let q_depth = textureLoad(front_depth, q_pixel, 0);
             let q_normal = decode_normal(textureLoad(front_normal, q_pixel, 0).xyz);
             let q_uv = (vec2<f32>(q_pixel) + 0.5) / vec2<f32>(full);
-            if q_depth <= 0.0 || !same_surface(linear_depth(q_uv, q_depth), q_normal, z, n) {
+            if q_depth <= 0.0 || !same_surface(linear_depth(view, q_uv, q_depth), q_normal, z, n) {
                 continue;
             }
             let v = load_value(q);
@@ -166,11 +148,6 @@ fn clamp_bounds(
     let reach = GAMMA * sigma / sqrt(on_surface) + vec2<f32>(CLAMP_MARGIN);
     return array<vec2<f32>, 2>(mean - reach, mean + reach);
 }
-
-fn cut() -> f32 {
-    return CUT;
-}
-#endif
 
 @compute @workgroup_size(8, 8, 1)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -189,9 +166,15 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let uv = (vec2<f32>(pixel) + 0.5) / vec2<f32>(full);
-    let z = linear_depth(uv, depth);
+    let z = linear_depth(view, uv, depth);
 
-    let bounds = clamp_bounds(texel, dims, full, z, n, value);
+#ifdef PAIR
+    let bounds = range_bounds(texel, dims, value);
+    let cut = 0.0;
+#else
+    let bounds = mean_bounds(texel, dims, full, z, n);
+    let cut = CUT;
+#endif
     let lo = bounds[0];
     let hi = bounds[1];
 
@@ -232,7 +215,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     let previous = history / weight;
     var count = min(frames / weight + 1.0, temporal.max_frames);
     let kept = clamp(previous, lo, hi);
-    if any(abs(kept - previous) > vec2<f32>(cut())) {
+    if any(abs(kept - previous) > vec2<f32>(cut)) {
         count = min(count, CLAMPED_FRAMES);
     }
     let result = mix(kept, value, 1.0 / count);

@@ -562,3 +562,61 @@ fn default_technique_and_timings() {
         );
     }
 }
+
+#[test]
+fn compare_writes_ours_bevys_and_none_side_by_side() {
+    let dir = temp_dir("compare");
+    let (out_ao, out_color, compare) = (
+        dir.join("ao.png"),
+        dir.join("color.png"),
+        dir.join("compare.png"),
+    );
+    let out = run(&[
+        "--scene",
+        scene_path().to_str().unwrap(),
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--radius",
+        "0.75",
+        "--technique",
+        "default",
+        "--out-ao",
+        out_ao.to_str().unwrap(),
+        "--out-color",
+        out_color.to_str().unwrap(),
+        "--compare",
+        compare.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "ao_capture --compare failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Three 160 × 120 images with 4 white pixels between them.
+    let luma = crate::examples::image_luma(&compare);
+    let width = 3 * 160 + 8;
+    assert_eq!(luma.len(), width * 120, "three images side by side");
+    let pixel = |third: usize, i: usize| luma[(i / 160) * width + third * 164 + i % 160] as i32;
+    let darker =
+        |a: usize, b: usize| (0..160 * 120).filter(move |&i| pixel(a, i) + 6 < pixel(b, i));
+    let (ours, bevy, lighter) = (
+        darker(0, 2).count(),
+        darker(1, 2).count(),
+        darker(2, 0).count() + darker(2, 1).count(),
+    );
+    println!(
+        "--compare: pixels darker than no AO: ours {ours}, Bevy's SSAO {bevy}; lighter {lighter}"
+    );
+    // Measured: ours 436, Bevy's 647 of 19,200, lighter 0: the lit image shows the AO (ambient
+    // light is most of the light) and the three views agree.
+    assert!(ours > 350 && bevy > 500, "both AO views should darken");
+    assert_eq!(lighter, 0, "AO never lightens");
+    // `--out-color` is ours alone, as in the comparison.
+    let color = crate::examples::image_luma(&out_color);
+    assert!((0..160 * 120).all(|i| color[i] as i32 == pixel(0, i)));
+    let bad = run(&["--compare", "x.png", "--msaa", "4", "--scene", "a.glb"]);
+    assert_eq!(bad.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).ok();
+}

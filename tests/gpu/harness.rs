@@ -22,6 +22,10 @@ use bevy_dynamic_ao::reference::{
 
 use crate::common;
 
+/// Bevy 0.19's SSAO radius is fixed in its shader (0.5 × 1.457 m, falling off over its outer
+/// 60%); every comparison with it uses the same ground-truth radius.
+pub const BEVY_SSAO_RADIUS: f32 = 0.73;
+
 /// Image size of every GPU test (pixels): small, so lavapipe stays quick.
 pub const WIDTH: u32 = 160;
 pub const HEIGHT: u32 = 120;
@@ -256,6 +260,20 @@ impl Gpu {
         gpu.camera = camera;
         gpu.readback = readback;
         gpu
+    }
+
+    /// Sets the quality level of the Bevy SSAO the camera carries (under
+    /// `AoTechnique::BevySsao` it is Bevy's own pass that runs).
+    pub fn set_bevy_ssao_level(
+        &mut self,
+        level: bevy::pbr::ScreenSpaceAmbientOcclusionQualityLevel,
+    ) {
+        let camera = self.camera;
+        self.app
+            .world_mut()
+            .get_mut::<bevy::pbr::ScreenSpaceAmbientOcclusion>(camera)
+            .expect("DynamicAo brings Bevy's SSAO component")
+            .quality_level = level;
     }
 
     /// Changes the camera's settings.

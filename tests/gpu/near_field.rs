@@ -2,7 +2,7 @@
 //! next to Bevy's own SSAO.
 
 use bevy::camera::ScalingMode;
-use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityLevel};
+use bevy::pbr::ScreenSpaceAmbientOcclusionQualityLevel;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
@@ -14,9 +14,7 @@ use bevy_dynamic_ao::reference::{
 use crate::harness::{Gpu, difference_stats, plain_ao};
 use crate::scenes;
 
-/// Bevy 0.19's SSAO radius is fixed in its shader (0.5 × 1.457 m, falling off over its outer
-/// 60%); every comparison with it uses the same ground-truth radius.
-pub const BEVY_SSAO_RADIUS: f32 = 0.73;
+pub use crate::harness::BEVY_SSAO_RADIUS;
 
 fn inputs(ao: &DynamicAo) -> NearFieldInputs {
     let params = ao.near_field.sanitized();
@@ -127,12 +125,7 @@ fn close_to_ground_truth_and_not_worse_than_bevy_ssao() {
             ScreenSpaceAmbientOcclusionQualityLevel::Medium,
             ScreenSpaceAmbientOcclusionQualityLevel::Ultra,
         ] {
-            let camera = gpu.camera;
-            gpu.app
-                .world_mut()
-                .get_mut::<ScreenSpaceAmbientOcclusion>(camera)
-                .expect("DynamicAo brings Bevy's SSAO component")
-                .quality_level = level;
+            gpu.set_bevy_ssao_level(level);
             let frame = gpu.frame(2);
             levels += &format!(
                 " {level:?} {:.4}",

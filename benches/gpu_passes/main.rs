@@ -15,9 +15,26 @@
 //! (a run that skips the dispatch is faster by the whole difference while the span reads the
 //! same), so there the `frame` column against the `voxels 8³` row is the measure of it.
 //! Timings are for comparison within one run on one adapter; the table names the adapter.
+//!
+//! `-- --plot FILE.svg` also measures the converged error of every preset and every Bevy SSAO
+//! level against the CPU ray tracer (`cost_error.rs`) and draws cost against error from this
+//! run's timings; with it, `-- --grid FILE.png` writes the default's and Bevy's SSAO High's AO
+//! beside the ground truth on each scene of that measurement and on a floor beside an
+//! off-screen wall. `cargo bench --bench gpu_passes -- --only "preset,Bevy SSAO" --plot
+//! docs/cost_error.svg --grid docs/vs_ground_truth.png` writes the README's plot and grid.
 
-#[path = "../examples/common/mod.rs"]
+#[path = "../../examples/common/mod.rs"]
 mod common;
+mod cost_error;
+#[path = "../../tests/gpu/harness.rs"]
+#[allow(dead_code)]
+mod harness;
+#[path = "../../tests/gpu/log_capture.rs"]
+#[allow(dead_code)]
+mod log_capture;
+#[path = "../../tests/gpu/scenes.rs"]
+#[allow(dead_code)]
+mod scenes;
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -227,6 +244,58 @@ fn main() {
             }
         }
         println!();
+    }
+
+    if let Some(path) = args
+        .iter()
+        .position(|a| a == "--plot")
+        .and_then(|i| args.get(i + 1))
+    {
+        // The AO passes: Bevy's SSAO or ours, not the rest of the frame.
+        let ao_ms = |row: &Row| -> f64 {
+            columns
+                .iter()
+                .filter_map(|(key, _)| row.passes.get(*key))
+                .sum()
+        };
+        let mut points = Vec::new();
+        println!("\n| configuration | AO passes (GPU ms) | mean converged RMSE |");
+        println!("|---|---:|---:|");
+        let measured = cost_error::measure();
+        for (name, ours, rmse) in measured.errors {
+            let Some(row) = rows.iter().find(|row| row.name == name) else {
+                eprintln!("--plot: no timing row for {name} (left out by --only?)");
+                continue;
+            };
+            println!("| {name} | {:.2} | {rmse:.3} |", ao_ms(row));
+            points.push(cost_error::Point {
+                name,
+                ours,
+                ms: ao_ms(row),
+                rmse,
+            });
+        }
+        let caption = format!("Cost against error, {}×{}, {adapter}", size.x, size.y);
+        match cost_error::plot(&points, std::path::Path::new(path), &caption) {
+            Ok(()) => println!("\nplot: {path}"),
+            Err(error) => {
+                eprintln!("--plot {path}: {error}");
+                std::process::exit(1);
+            }
+        }
+        if let Some(grid) = args
+            .iter()
+            .position(|a| a == "--grid")
+            .and_then(|i| args.get(i + 1))
+        {
+            match cost_error::write_grid(std::path::Path::new(grid), &measured.images) {
+                Ok(()) => println!("grid: {grid}"),
+                Err(error) => {
+                    eprintln!("--grid {grid}: {error}");
+                    std::process::exit(1);
+                }
+            }
+        }
     }
 }
 
