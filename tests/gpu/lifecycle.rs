@@ -162,6 +162,59 @@ fn a_field_changed_in_place_is_drawn_as_the_new_field() {
     assert!(after.0 < 0.002 && after.1 < 0.01, "{after:?}");
 }
 
+/// A `.aofield` file rewritten on disk and reloaded through the asset server (what Bevy's file
+/// watcher does on a hot reload) is drawn as the new field on the next frames.
+#[test]
+fn a_field_file_reloaded_from_disk_is_drawn_as_the_new_field() {
+    let folder = std::env::temp_dir().join(format!("dynamic_ao_reload_{}", std::process::id()));
+    std::fs::create_dir_all(&folder).unwrap();
+    let file = folder.join("cube.aofield");
+    let (first, second) = (cube_field(1.0, 8), cube_field(1.0, 16));
+    std::fs::write(&file, first.to_bytes()).unwrap();
+    let mut gpu = Gpu::with_asset_folder(
+        &scenes::cube_on_plane(),
+        fields_only(),
+        Some(folder.to_str().unwrap()),
+    );
+    let world = gpu.app.world_mut();
+    let handle: Handle<AoFieldData> = world.resource::<AssetServer>().load("cube.aofield");
+    let cube = world
+        .query_filtered::<Entity, With<Mesh3d>>()
+        .iter(world)
+        .nth(1)
+        .expect("the cube");
+    world
+        .entity_mut(cube)
+        .insert(AoField::Asset(handle.clone()));
+    let wait_for_resolution = |gpu: &mut Gpu, resolution| {
+        for _ in 0..300 {
+            gpu.update(1);
+            let fields = gpu.app.world().resource::<Assets<AoFieldData>>();
+            if fields
+                .get(&handle)
+                .is_some_and(|f| f.resolution == resolution)
+            {
+                return;
+            }
+        }
+        panic!("cube.aofield at {resolution:?} did not load in 300 frames");
+    };
+    wait_for_resolution(&mut gpu, first.resolution);
+    let before = against_cpu(&mut gpu, &first, 8);
+    std::fs::write(&file, second.to_bytes()).unwrap();
+    gpu.app
+        .world()
+        .resource::<AssetServer>()
+        .reload("cube.aofield");
+    wait_for_resolution(&mut gpu, second.resolution);
+    let after = against_cpu(&mut gpu, &second, 3);
+    println!("GPU vs CPU (mean, 99th percentile): file {before:?}, reloaded {after:?}");
+    assert!(before.0 < 0.002 && before.1 < 0.01, "{before:?}");
+    assert!(after.0 < 0.002 && after.1 < 0.01, "{after:?}");
+    drop(gpu);
+    std::fs::remove_dir_all(&folder).ok();
+}
+
 /// Waits until `count` occluders have their field.
 fn wait_for_fields(gpu: &mut Gpu, count: usize) {
     for _ in 0..400 {
