@@ -103,7 +103,7 @@
 //! | | cross-bilateral blur | `filter/blur.wgsl` |
 //! | Reinbothe et al. 2009 | §5 voxelization | `voxels/voxelize.wgsl` |
 //! | | §6 eq. 2–3, rays through the grid, Wendland's kernel | `voxels/voxel_ao.wgsl`, `shaders/math.wgsl` |
-//! | | §7 eq. 5–7, joint bilateral upsampling | `filter/upsample.wgsl` |
+//! | | §7 eq. 5–7, joint bilateral upsampling | `shaders/joint_upsample.wgsl` (window and weights), `filter/upsample.wgsl`, `compose/compose.wgsl` (half-resolution splats) |
 //!
 //! [`reference`](mod@reference) evaluates the same formulas on the CPU and ray-traces ground truth; the tests,
 //! the benchmarks and the `ao_capture` example use it.
@@ -173,6 +173,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
         load_shader_library!(app, "shaders/cap_occlusion.wgsl");
         load_shader_library!(app, "shaders/proxy_occlusion.wgsl");
+        load_shader_library!(app, "shaders/joint_upsample.wgsl");
 
         app.register_type::<DynamicAo>()
             .register_type::<readback::AoReadback>()

@@ -15,9 +15,13 @@
 // channel counts, because what the ND-buffer misses is most often the hidden side of what it
 // shows (the two cover the same directions); beyond it, the green channel joins as an
 // independent occluder. `Add` adds the near and far terms and clamps
-// (Shanmugam & Arikan 2007, §6); `Max` takes the larger.
+// (Shanmugam & Arikan 2007, §6); `Max` takes the larger. The sphere and field splats may arrive at
+// half resolution: each pixel then blends the texels that bracket it (`joint_upsample`).
 
+#import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel}
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::joint_upsample::{Bracket, bracket, bracket_texel}
 
 @group(0) @binding(0) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(1) var near_occlusion: texture_2d<f32>;
@@ -29,6 +33,44 @@
 #else
 @group(0) @binding(5) var visibility: texture_storage_2d<r32float, write>;
 #endif
+@group(0) @binding(6) var<uniform> view: View;
+@group(0) @binding(7) var front_depth: texture_depth_2d;
+@group(0) @binding(8) var front_normal: texture_2d<f32>;
+
+// With UPSAMPLE_SPLATS (the splats at half resolution), the bracket of `pixel` in them; its
+// weights are all 0 (read `nearest` alone) at full resolution and on the background. A variant of
+// its own: on lavapipe the upsampling costs every pixel even where a uniform skips it.
+fn splat_bracket(pixel: vec2<i32>, dims: vec2<u32>) -> Bracket {
+    var none = Bracket(pixel, vec2<i32>(0), vec4<f32>(0.0));
+#ifdef UPSAMPLE_SPLATS
+    none.nearest = pixel / 2;
+    let depth = textureLoad(front_depth, pixel, 0);
+    if depth <= 0.0 {
+        return none;
+    }
+    let p = world_position(view, pixel, vec2<f32>(dims), depth);
+    let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
+    let low_dims = vec2<i32>((dims + 1u) / 2u);
+    // A support of a few pixels' footprint measured worse (more pixels fall back to the nearest
+    // texel, which may lie on another surface) than the near field's reach.
+    return bracket(view, front_depth, front_normal, pixel, p, n, low_dims, settings.image_space_radius, 1.0);
+#else
+    return none;
+#endif
+}
+
+// The value of a splat buffer at the pixel `b` was made for.
+fn splat_value(splat: texture_2d<f32>, b: Bracket) -> vec4<f32> {
+    let weights = dot(b.weights, vec4<f32>(1.0));
+    if weights <= 0.0 {
+        return textureLoad(splat, b.nearest, 0);
+    }
+    let sum = b.weights.x * textureLoad(splat, bracket_texel(b, 0), 0)
+        + b.weights.y * textureLoad(splat, bracket_texel(b, 1), 0)
+        + b.weights.z * textureLoad(splat, bracket_texel(b, 2), 0)
+        + b.weights.w * textureLoad(splat, bracket_texel(b, 3), 0);
+    return sum / weights;
+}
 
 // Both channels of the proxies' product `occlusion` scaled so that the proxies of skinned meshes
 // (whose product leaves `articulated_open` open, the largest single one blocking `largest`) count
@@ -60,12 +102,13 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // Per channel: what the far-field occluders leave open.
     var open = vec2<f32>(1.0);
+    let splat = splat_bracket(pixel, dims);
     if settings.spheres != 0u {
-        let spheres = textureLoad(sphere_visibility, pixel, 0);
+        let spheres = splat_value(sphere_visibility, splat);
         open *= 1.0 - sphere_union(1.0 - spheres.rg, spheres.b, spheres.a);
     }
     if settings.fields != 0u {
-        open *= textureLoad(field_visibility, pixel, 0).rg;
+        open *= splat_value(field_visibility, splat).rg;
     }
     if settings.voxels != 0u {
         open *= 1.0 - textureLoad(voxel_occlusion, pixel, 0).rg;

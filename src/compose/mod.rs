@@ -7,7 +7,9 @@
 //! (`ScreenSpaceAmbientOcclusionResources::screen_space_ambient_occlusion_texture`, mesh view
 //! binding 17). Bevy's PBR shader applies that texture to ambient/indirect diffuse light and
 //! environment specular only, so direct lights are never darkened. Bevy's own SSAO pass is
-//! skipped on views where ours runs, by removing its pipeline id once our pipelines are ready.
+//! skipped on views where ours runs, by removing its pipeline id once our pipelines are ready
+//! (and runs again if one of them stops compiling, see `failed`). The sphere and field splats may
+//! arrive at half resolution; a second variant of the pass upsamples them on the way.
 //!
 //! The debug view draws the same visibility over the lit image, full screen.
 
@@ -111,9 +113,7 @@ pub(crate) fn hand_over_from_bevy_ssao(
     for entity in &stale {
         commands.entity(entity).remove::<AoPassesReady>();
     }
-    let compose_ready = pipeline_cache
-        .get_compute_pipeline(compose.pipeline)
-        .is_some();
+    let compose_ready = compose.ready(&pipeline_cache);
     for (entity, pending, bevy_ssao) in &views {
         if compose_ready && pending.all_ready() {
             commands.entity(entity).insert(AoPassesReady);

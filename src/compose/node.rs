@@ -7,7 +7,7 @@ use bevy::render::{
     extract_component::DynamicUniformIndex,
     render_resource::{PipelineCache, RenderPassDescriptor},
     renderer::{RenderContext, ViewQuery},
-    view::ViewTarget,
+    view::{ViewTarget, ViewUniformOffset},
 };
 
 use super::AoPassesReady;
@@ -22,20 +22,21 @@ pub(crate) fn compose_pass(
         &DynamicAoView,
         &ComposeBindGroup,
         &DynamicUniformIndex<DynamicAoUniform>,
+        &ViewUniformOffset,
         Has<AoPassesReady>,
     )>,
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, ao_view, bind_group, settings_index, ready) = view.into_inner();
+    let (camera, ao_view, bind_group, settings_index, view_offset, ready) = view.into_inner();
     // Until every pass of the view has compiled, Bevy's SSAO still writes the texture.
     if !ao_view.replaces_bevy_ssao() || !ready {
         return;
     }
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
-        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+        pipeline_cache.get_compute_pipeline(pipeline.for_view(ao_view)),
     ) else {
         return;
     };
@@ -44,7 +45,7 @@ pub(crate) fn compose_pass(
         label: "dynamic_ao_compose",
         pipeline: compute_pipeline,
         bind_group: &bind_group.0,
-        offsets: &[settings_index.index()],
+        offsets: &[settings_index.index(), view_offset.offset],
         texels: size,
     };
     record_passes(&mut ctx, "dynamic_ao_compose", true, &[step]);

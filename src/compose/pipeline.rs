@@ -4,22 +4,47 @@ use bevy::asset::load_embedded_asset;
 use bevy::ecs::prelude::*;
 use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
 use bevy::render::{
-    extract_component::ComponentUniforms,
     render_resource::{
-        binding_types::{texture_2d, texture_storage_2d, uniform_buffer},
+        binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
     renderer::{RenderAdapter, RenderDevice},
+    view::ViewUniform,
 };
 use bevy::utils::default;
 
 use super::{ParkedSsao, visibility_texture};
-use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm};
+use crate::nd_buffer::FrontLayer;
+use crate::view::{
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm, ViewBindings,
+};
 
 #[derive(Resource)]
 pub(crate) struct ComposePipeline {
     pub layout: BindGroupLayoutDescriptor,
+    /// Every term's buffer at the view's size.
     pub pipeline: CachedComputePipelineId,
+    /// The sphere and field splats at half resolution, upsampled on the way.
+    pub upsampling: CachedComputePipelineId,
+}
+
+impl ComposePipeline {
+    /// The variant `view` needs.
+    pub fn for_view(&self, view: &DynamicAoView) -> CachedComputePipelineId {
+        let splats = view.has(FarTerm::Spheres) || view.has(FarTerm::Fields);
+        if view.far_half_resolution && splats {
+            self.upsampling
+        } else {
+            self.pipeline
+        }
+    }
+
+    /// Whether both variants have compiled.
+    pub fn ready(&self, cache: &PipelineCache) -> bool {
+        [self.pipeline, self.upsampling]
+            .iter()
+            .all(|id| cache.get_compute_pipeline(*id).is_some())
+    }
 }
 
 /// The format Bevy gives its SSAO texture: R16Float where the adapter can store to it.
@@ -49,24 +74,39 @@ impl FromWorld for ComposePipeline {
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_2d(TextureSampleType::Float { filterable: false }),
                     texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+                    // The view and the front layer, to upsample half-resolution splats.
+                    uniform_buffer::<ViewUniform>(true),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
                 ),
             ),
         );
-        let mut shader_defs = Vec::new();
-        if format == TextureFormat::R16Float {
-            shader_defs.push("VISIBILITY_R16FLOAT".into());
-        }
-        let pipeline =
+        let shader = load_embedded_asset!(world, "compose.wgsl");
+        let queue = |label: &str, upsample: bool| {
+            let mut shader_defs = Vec::new();
+            if format == TextureFormat::R16Float {
+                shader_defs.push("VISIBILITY_R16FLOAT".into());
+            }
+            if upsample {
+                shader_defs.push("UPSAMPLE_SPLATS".into());
+            }
             world
                 .resource::<PipelineCache>()
                 .queue_compute_pipeline(ComputePipelineDescriptor {
-                    label: Some("dynamic_ao_compose_pipeline".into()),
+                    label: Some(label.to_string().into()),
                     layout: vec![layout.clone()],
-                    shader: load_embedded_asset!(world, "compose.wgsl"),
+                    shader: shader.clone(),
                     shader_defs,
                     ..default()
-                });
-        Self { layout, pipeline }
+                })
+        };
+        let pipeline = queue("dynamic_ao_compose_pipeline", false);
+        let upsampling = queue("dynamic_ao_compose_upsampling_pipeline", true);
+        Self {
+            layout,
+            pipeline,
+            upsampling,
+        }
     }
 }
 
@@ -78,7 +118,7 @@ pub(crate) fn prepare_compose_bind_groups(
     render_device: Res<RenderDevice>,
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
-    settings: Res<ComponentUniforms<DynamicAoUniform>>,
+    bindings: ViewBindings,
     views: Query<
         (
             Entity,
@@ -86,14 +126,15 @@ pub(crate) fn prepare_compose_bind_groups(
             &FarFieldOutputs,
             Option<&ScreenSpaceAmbientOcclusionResources>,
             Option<&ParkedSsao>,
+            FrontLayer,
         ),
         With<DynamicAoView>,
     >,
 ) {
-    let Some(settings_binding) = settings.binding() else {
+    let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
-    for (entity, textures, outputs, resources, parked) in &views {
+    for (entity, textures, outputs, resources, parked, prepass) in &views {
         let Some(visibility) = visibility_texture(resources, parked) else {
             commands.entity(entity).remove::<ComposeBindGroup>();
             continue;
@@ -116,6 +157,12 @@ pub(crate) fn prepare_compose_bind_groups(
                 far(FarTerm::Fields),
                 far(FarTerm::Voxels),
                 &visibility.default_view,
+                view_binding.clone(),
+                // Read only where a splat ran at half resolution, which needs the front layer.
+                prepass.depth().unwrap_or(&textures.back_depth.default_view),
+                prepass
+                    .normal()
+                    .unwrap_or(&textures.full_occlusion.default_view),
             )),
         );
         commands.entity(entity).insert(ComposeBindGroup(bind_group));

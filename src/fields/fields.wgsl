@@ -9,7 +9,9 @@
 // clipped by the receiver's tangent plane (T_clip of §3.3.1, `cap_occlusion`). The field holds
 // them twice, for hits within R and within the near field's reach; under `FarFieldBlend::CountOnce`
 // the near part goes to the red channel where the ND-buffer does not hold its occluders, the
-// rest to the green one. Blending multiplies the field buffer by 1 − that (§3.3.2).
+// rest to the green one. Blending multiplies the field buffer by 1 − that (§3.3.2). At half
+// resolution (`DynamicAo::half_resolution`) each texel does so for one pixel of its 2 × 2 and
+// compose upsamples the buffer.
 // `reference::fields` is the CPU twin.
 
 #import bevy_render::view::View
@@ -139,7 +141,8 @@ fn cone_occlusion(field: FieldInstance, a: f32, d: vec3<f32>, n: vec3<f32>) -> f
 
 @fragment
 fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(floor(in.position.xy));
+    // At half resolution texel l stands for pixel 2l (as `joint_upsample` expects).
+    let pixel = vec2<i32>(floor(in.position.xy)) * i32(settings.far_resolution_scale);
     let depth = textureLoad(front_depth, pixel, 0);
     let normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || all(normal == vec3<f32>(0.0)) {

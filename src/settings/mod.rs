@@ -80,8 +80,9 @@ pub struct DynamicAo {
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
-    /// al. 2009, eq. 5–7); the blur then runs at full resolution. Default: `true` (as
-    /// [`AoPreset::High`] has it).
+    /// al. 2009, eq. 5–7); the blur then runs at full resolution. The sphere and field splats
+    /// follow it (each texel evaluates one pixel of its 2 × 2; compose upsamples them over
+    /// normals and positions). Default: `true` (as [`AoPreset::High`] has it).
     pub half_resolution: bool,
     /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)'s
     /// proxies in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are

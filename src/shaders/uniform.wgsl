@@ -31,6 +31,9 @@ struct DynamicAoUniform {
     ray_march_steps: u32,
     // 1 at full resolution, 2 at half resolution.
     resolution_scale: u32,
+    // Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 at half
+    // resolution (compose upsamples them, `joint_upsample`).
+    far_resolution_scale: u32,
     // 1 when sphere occluders take part.
     spheres: u32,
     // 0: near + far, 1: max(near, far), 2: counted once, 1 − (1 − near)(1 − far).

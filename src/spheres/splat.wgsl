@@ -2,7 +2,8 @@
 // every pixel whose surface point its occlusion can reach (the proxy's bounding sphere grown by
 // the camera's radius R, or by eq. 5's d_far under `ProxyReach::Epsilon`); the fragment reads the
 // ND-buffer and multiplies the visibility buffer by 1 − the proxy's occlusion
-// (`proxy_occlusion`), per channel. Counted once: under `FarFieldBlend::CountOnce` the part of the
+// (`proxy_occlusion`), per channel; at half resolution (`DynamicAo::half_resolution`) each texel
+// does so for one pixel of its 2 × 2 and compose upsamples the buffer. Counted once: under `FarFieldBlend::CountOnce` the part of the
 // proxy within the near field's reach goes to the red channel where the ND-buffer does not hold it
 // (the near field counts the rest of that part), the part beyond to the green one.
 // `reference::spheres` is the CPU twin.
@@ -41,6 +42,9 @@ struct VertexOutput {
     // branches into the fragment shader and, for this shader, compiled and kept a new variant at
     // every draw, about 6.6 MB and 25 ms each (the soak benchmark's growth, BENCHMARKS.md).
     @location(1) @interpolate(flat) view_settings: vec4<f32>,
+    // Pixels per texel of the target in each axis (`far_resolution_scale`), flat for the same
+    // reason.
+    @location(2) @interpolate(flat) scale: i32,
 }
 
 // The view's settings as the fragment stage reads them (`VertexOutput::view_settings`).
@@ -123,6 +127,7 @@ fn vertex(
         f32(settings.seen_back_layer != 0u),
         f32(view.clip_from_view[3][3] == 1.0),
     );
+    out.scale = i32(settings.far_resolution_scale);
     return out;
 }
 
@@ -212,7 +217,8 @@ fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, p: vec3<f32>, n: vec3<f32>, r
 
 @fragment
 fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(floor(in.position.xy));
+    // At half resolution texel l stands for pixel 2l (as `joint_upsample` expects).
+    let pixel = vec2<i32>(floor(in.position.xy)) * in.scale;
     let depth = textureLoad(front_depth, pixel, 0);
     let normal = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if depth <= 0.0 || all(normal == vec3<f32>(0.0)) {

@@ -112,6 +112,8 @@ pub(crate) struct DynamicAoView {
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.
     pub half_resolution: bool,
+    /// The sphere and field splats drawn at half resolution (compose upsamples them).
+    pub far_half_resolution: bool,
     /// The image-space occlusion is accumulated over frames (see [`crate::AoTemporal`]).
     pub temporal: bool,
     /// The voxel term is accumulated over frames (see [`crate::AoTemporal`]).
@@ -241,8 +243,8 @@ pub(crate) fn view_texture(
     )
 }
 
-/// The system that makes the visibility buffer of far-field term `term` (full size,
-/// [`FAR_OCCLUSION_FORMAT`], drawn into) on every view it takes part in, and hands it to compose.
+/// The system that makes the visibility buffer of far-field term `term` (full size, or half size
+/// where the view's splats run at half resolution; [`FAR_OCCLUSION_FORMAT`], drawn into) on every view it takes part in, and hands it to compose.
 pub(crate) fn prepare_far_visibility(
     term: FarTerm,
     label: &'static str,
@@ -254,6 +256,11 @@ pub(crate) fn prepare_far_visibility(
     move |mut texture_cache, render_device, mut views| {
         for (camera, view, mut outputs) in &mut views {
             if let (true, Some(size)) = (view.has(term), view_size(camera)) {
+                let size = if view.far_half_resolution {
+                    half_size(size)
+                } else {
+                    size
+                };
                 let usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
                 let texture = view_texture(
                     &mut texture_cache,

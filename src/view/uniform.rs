@@ -45,6 +45,9 @@ pub(crate) struct DynamicAoUniform {
     pub ray_march_steps: u32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
+    /// Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 where they
+    /// run at half resolution (compose upsamples them).
+    pub far_resolution_scale: u32,
     /// 1 when sphere occluders take part.
     pub spheres: u32,
     /// 0: near + far, 1: max(near, far) (see [`crate::FarFieldBlend`]).
@@ -163,6 +166,7 @@ pub(super) fn extract_views(
                 back_layer,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
+                far_half_resolution: ao.half_resolution,
                 temporal,
                 voxel_temporal,
                 far_terms,
@@ -188,6 +192,7 @@ pub(super) fn extract_views(
                 ray_march_elevations: rays.elevations,
                 ray_march_steps: rays.steps,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
+                far_resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),

@@ -198,3 +198,50 @@ fn bad_sphere_occluder_settings_are_replaced_with_a_warning() {
     );
     assert!(largest < 1e-6, "off by {largest}");
 }
+
+/// A shader that stops compiling (the compose shader replaced by one with a syntax error, as a
+/// hot reload during development can do): one error names the pipeline, and the camera goes back
+/// to Bevy's SSAO, exactly the image Bevy's SSAO gives on the same view.
+#[test]
+fn a_pipeline_that_fails_to_compile_leaves_the_camera_on_bevys_ssao() {
+    let scene = scenes::cube_on_plane();
+    let bevy = Gpu::new(
+        &scene,
+        DynamicAo {
+            technique: AoTechnique::BevySsao,
+            ..plain_ao()
+        },
+    )
+    .frame(4);
+    let mut gpu = Gpu::new(&scene, plain_ao());
+    let ours = gpu.frame(4);
+    let world = gpu.app.world_mut();
+    let mut shaders = world.resource_mut::<Assets<Shader>>();
+    let (id, path) = shaders
+        .iter()
+        .find(|(_, shader)| shader.path.ends_with("compose/compose.wgsl"))
+        .map(|(id, shader)| (id, shader.path.clone()))
+        .expect("the compose shader is loaded");
+    shaders
+        .insert(id, Shader::from_wgsl("fn compose( {", path))
+        .expect("the shader's slot is live");
+    let after = gpu.frame(6);
+    assert_logged_once(&[
+        "'dynamic_ao_compose_pipeline'",
+        "failed to compile",
+        "keep Bevy's SSAO",
+    ]);
+    let from_bevy = largest_difference(&after.visibility, &bevy.visibility);
+    let from_ours = largest_difference(&ours.visibility, &bevy.visibility);
+    println!(
+        "after the failure: largest difference from Bevy's SSAO {from_bevy}; ours differed by {from_ours}"
+    );
+    assert!(
+        from_ours > 0.1,
+        "ours should differ from Bevy's SSAO: {from_ours}"
+    );
+    assert!(
+        from_bevy < 1e-3,
+        "the camera should show Bevy's SSAO: {from_bevy}"
+    );
+}

@@ -1,0 +1,87 @@
+// The texels of a half-resolution buffer that a full-resolution pixel blends, and their weights
+// (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): the 2 × 2 texels that bracket the pixel
+// (those bilinear interpolation would read), each weighted by the Wendland kernel (eq. 3) over
+// screen distance, normal difference and world distance to the pixel it was computed at (texel l
+// at pixel 2l). Used by the filter's upsampling of the image-space and voxel terms (which also
+// weigh the AO difference) and by compose for the sphere and field splats.
+// `reference::filter` is the CPU twin.
+
+#define_import_path bevy_dynamic_ao::joint_upsample
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::math::wendland
+
+// Screen-space support of w_d, full-resolution pixels (the m of eq. 6).
+const WINDOW: f32 = 4.0;
+
+// The bracketing texels of one full-resolution pixel: texel k (`bracket_texel`) counts with
+// `weights[k]` (0 where it lies off the buffer, on the background, or on another surface);
+// `nearest` is the texel holding the pixel, for when no weight counts. No arrays and no
+// dynamic indices: CPU rasterizers spill those to memory.
+struct Bracket {
+    nearest: vec2<i32>,
+    // Towards the other texels of the bracket, ±1 per axis.
+    toward: vec2<i32>,
+    weights: vec4<f32>,
+}
+
+// Texel `k` (0–3) of bracket `b`.
+fn bracket_texel(b: Bracket, k: i32) -> vec2<i32> {
+    return b.nearest + b.toward * vec2<i32>(k & 1, k >> 1u);
+}
+
+// The weight of texel `l` for pixel `x` (world position `p`, unit normal `n`).
+fn texel_weight(
+    view: View,
+    depth_texture: texture_depth_2d,
+    normal_texture: texture_2d<f32>,
+    x: vec2<i32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    l: vec2<i32>,
+    low_dims: vec2<i32>,
+    reach: f32,
+    bend: f32,
+) -> f32 {
+    let dims = vec2<i32>(textureDimensions(depth_texture));
+    let y = l * 2;
+    if any(l < vec2<i32>(0)) || any(l >= low_dims) || any(y >= dims) {
+        return 0.0;
+    }
+    let dq = textureLoad(depth_texture, y, 0);
+    if dq <= 0.0 {
+        return 0.0;
+    }
+    let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
+    let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), bend);
+    let w_p = wendland(distance(p, world_position(view, y, vec2<f32>(dims), dq)), reach);
+    return w_d * w_n * w_p;
+}
+
+// The bracket of pixel `x` (world position `p`, unit normal `n`) in a buffer of `low_dims`
+// texels, over the ND-buffer `depth_texture` / `normal_texture`; `reach` (metres) is the support
+// of the world-distance weight, `bend` that of the normal weight (over 1 − cos of the angle
+// between the normals: 2 lets every surface count, 1 none at a right angle).
+fn bracket(
+    view: View,
+    depth_texture: texture_depth_2d,
+    normal_texture: texture_2d<f32>,
+    x: vec2<i32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    low_dims: vec2<i32>,
+    reach: f32,
+    bend: f32,
+) -> Bracket {
+    // Texel l was computed at pixel 2l: an odd x lies between l and l + 1, an even one on l.
+    let toward = select(vec2<i32>(-1), vec2<i32>(1), (x & vec2<i32>(1)) == vec2<i32>(1));
+    var b = Bracket(min(x / 2, low_dims - 1), toward, vec4<f32>(0.0));
+    b.weights = vec4<f32>(
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 0), low_dims, reach, bend),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 1), low_dims, reach, bend),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 2), low_dims, reach, bend),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 3), low_dims, reach, bend),
+    );
+    return b;
+}
