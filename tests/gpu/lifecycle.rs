@@ -444,3 +444,74 @@ fn sphere_occluders_and_voxel_volumes_follow_their_components() {
     let despawned = close(&gpu.frame(4).visibility, &none);
     assert!(despawned < 1e-5, "occluder despawned: off by {despawned}");
 }
+
+/// Entities the `Last` system despawns: after the plugin's own systems have read them this frame,
+/// before the render world extracts it.
+#[derive(Resource, Default)]
+struct DespawnInLast(Vec<Entity>);
+
+fn despawn_in_last(mut commands: Commands, mut doomed: ResMut<DespawnInLast>) {
+    for entity in doomed.0.drain(..) {
+        commands.entity(entity).despawn();
+    }
+}
+
+/// Despawned mid-frame, all at once, with every far-field term on: a box with a
+/// `SphereOccluder`, a box with a baked `AoField` and a `VoxelAoVolume`. No panic, and the next
+/// frames show exactly the image of the scene before they came.
+#[test]
+fn occluders_despawned_mid_frame_are_gone_from_the_next_frames() {
+    let far_only = DynamicAo {
+        technique: AoTechnique::Off,
+        ..plain_ao()
+    };
+    let mut gpu = Gpu::new(&scenes::cube_on_plane(), far_only);
+    gpu.app
+        .init_resource::<DespawnInLast>()
+        .add_systems(Last, despawn_in_last);
+    let before = gpu.frame(4).visibility;
+
+    let world = gpu.app.world_mut();
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(0.6, 0.6, 0.6));
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::default());
+    let mut occluder = |x: f32| {
+        world
+            .spawn((
+                Mesh3d(mesh.clone()),
+                MeshMaterial3d(material.clone()),
+                Transform::from_xyz(x, 0.3, -0.6),
+            ))
+            .id()
+    };
+    let (spheres, field) = (occluder(1.2), occluder(-1.2));
+    world.entity_mut(spheres).insert(SphereOccluder::default());
+    world.entity_mut(field).insert(AoField::default());
+    let volume = world
+        .spawn((
+            Transform::from_xyz(0.0, 1.0, 0.0),
+            VoxelAoVolume {
+                half_extents: Vec3::new(2.5, 1.0, 2.5),
+                resolution: 64,
+                ..default()
+            },
+        ))
+        .id();
+    wait_for_fields(&mut gpu, 1);
+    let with = gpu.frame(4).visibility;
+    let cast = crate::harness::largest_difference(&with, &before);
+    assert!(cast > 0.05, "the occluders cast nothing: {cast}");
+
+    gpu.app
+        .world_mut()
+        .resource_mut::<DespawnInLast>()
+        .0
+        .extend([spheres, field, volume]);
+    let after = gpu.frame(4).visibility;
+    let off = crate::harness::largest_difference(&after, &before);
+    println!("despawned mid-frame: they cast up to {cast}; afterwards off by {off}");
+    assert!(off < 1e-5, "despawned mid-frame: off by {off}");
+}
