@@ -365,6 +365,20 @@ fn active_extent(gpu: &mut Gpu, entity: Entity) -> Vec3 {
         .map_or(Vec3::ZERO, |f| f.half_extent / active.baked_scale)
 }
 
+/// A voxel volume over the middle of `cube_on_plane`, 64 cells a side.
+fn spawn_volume(world: &mut World) -> Entity {
+    world
+        .spawn((
+            Transform::from_xyz(0.0, 1.0, 0.0),
+            VoxelAoVolume {
+                half_extents: Vec3::new(2.5, 1.0, 2.5),
+                resolution: 64,
+                ..default()
+            },
+        ))
+        .id()
+}
+
 /// Sphere occluders and voxel volumes follow their components: a `SphereOccluder` given to a box,
 /// taken away and given back, then the box despawned; a `VoxelAoVolume` spawned and despawned.
 /// Each change shows on the next frames, exactly as the state it returns to looked.
@@ -417,18 +431,7 @@ fn sphere_occluders_and_voxel_volumes_follow_their_components() {
 
     gpu.set_ao(|ao| *ao = far_only(false));
     let no_volume = gpu.frame(4).visibility;
-    let volume = gpu
-        .app
-        .world_mut()
-        .spawn((
-            Transform::from_xyz(0.0, 1.0, 0.0),
-            VoxelAoVolume {
-                half_extents: Vec3::new(2.5, 1.0, 2.5),
-                resolution: 64,
-                ..default()
-            },
-        ))
-        .id();
+    let volume = spawn_volume(gpu.app.world_mut());
     let voxels = gpu.frame(4).visibility;
     assert!(
         close(&voxels, &no_volume) > 0.05,
@@ -490,16 +493,7 @@ fn occluders_despawned_mid_frame_are_gone_from_the_next_frames() {
     let (spheres, field) = (occluder(1.2), occluder(-1.2));
     world.entity_mut(spheres).insert(SphereOccluder::default());
     world.entity_mut(field).insert(AoField::default());
-    let volume = world
-        .spawn((
-            Transform::from_xyz(0.0, 1.0, 0.0),
-            VoxelAoVolume {
-                half_extents: Vec3::new(2.5, 1.0, 2.5),
-                resolution: 64,
-                ..default()
-            },
-        ))
-        .id();
+    let volume = spawn_volume(world);
     wait_for_fields(&mut gpu, 1);
     let with = gpu.frame(4).visibility;
     let cast = crate::harness::largest_difference(&with, &before);
