@@ -1,11 +1,13 @@
 //! Filtering of the occlusion buffer.
 //!
 //! At half resolution, a joint bilateral upsampling first brings the occlusion back to full
-//! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the 3×3
-//! low-resolution texels around it with the product of Wendland kernels (eq. 3) over screen
+//! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the 2 × 2
+//! low-resolution texels that bracket it (the paper's window is larger; these are the texels
+//! bilinear interpolation would read) with the product of Wendland kernels (eq. 3) over screen
 //! distance (support 4 pixels), normal difference 1 − n(x)·n(y) (support 2; the paper prints
 //! 1 + n(x)·n(y), which would favour opposite normals), world distance (support R) and AO
-//! difference (support 1).
+//! difference (support 1). One invocation upsamples the 2 × 2 pixels of one texel, reading the
+//! 3 × 3 texels their brackets share once.
 //!
 //! A separable cross-bilateral blur (Bavoil & Sainz 2008, "Cross Bilateral Filter"): one pass
 //! along X into a scratch texture, one along Y back into the occlusion buffer. Each tap is

@@ -70,7 +70,8 @@ pub(crate) fn upsample_pass(
         pipeline,
         bind_group: &bind_group.0,
         offsets: &[view_offset.offset, settings_index.index()],
-        texels: size,
+        // One invocation per 2 × 2 pixels (`upsample.wgsl`).
+        texels: (size + 1) / 2,
     };
     record_passes(&mut ctx, "dynamic_ao_upsample", true, &[step]);
 }

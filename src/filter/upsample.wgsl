@@ -4,14 +4,16 @@
 // difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
 // The window is the 2 × 2 texels that bracket x (those bilinear interpolation would read)
 // rather than 3 × 3: less than half the loads and position reconstructions, for the pass that
-// cost more than the half-resolution AO it upsampled (`joint_upsample::bracket` gives the
-// window and the weights but the AO difference's). `reference::filter` is the CPU twin.
+// cost more than the half-resolution AO it upsampled. One invocation upsamples the 2 × 2 pixels
+// of one texel, whose brackets lie within the 3 × 3 texels around it: each texel's depth,
+// normal, position and value are read once for the four (9 texels instead of 16), and the
+// quad's first pixel is the texel's own. `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::math::wendland
-#import bevy_dynamic_ao::joint_upsample::{bracket, bracket_texel}
+#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
@@ -33,36 +35,83 @@ fn low_value(l: vec2<i32>) -> vec2<f32> {
 #endif
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
-    let dims = vec2<i32>(textureDimensions(depth_texture));
-    let x = vec2<i32>(id.xy);
+// One texel of `low`: where it was computed, and its channels.
+struct Texel {
+    guide: Guide,
+    value: vec2<f32>,
+}
+
+fn texel(l: vec2<i32>, low_dims: vec2<i32>) -> Texel {
+    let g = texel_guide(view, depth_texture, normal_texture, l, low_dims);
+    // A texel off the buffer has no weight; its value is never read.
+    return Texel(g, low_value(clamp(l, vec2<i32>(0), low_dims - 1)));
+}
+
+// The weight of texel `t` for pixel `x` (world position `p`, unit normal `n`, nearest texel's
+// summed channels `h_x`).
+fn weight(t: Texel, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
+    let w = guide_weight(t.guide, x, p, n, settings.image_space_radius, 2.0);
+    return w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
+}
+
+// Pixel `x` at `depth` blended from its bracket: `a` holds it, `b` and `c` lie beside `a`
+// along x and along y, `d` diagonally.
+fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel, d: Texel) {
     if any(x >= dims) {
         return;
     }
-    let depth = textureLoad(depth_texture, x, 0);
     if depth <= 0.0 {
         textureStore(output, x, vec4<f32>(0.0));
         return;
     }
     let p = world_position(view, x, vec2<f32>(dims), depth);
     let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
-    let b = bracket(view, depth_texture, normal_texture, x, p, n, vec2<i32>(textureDimensions(low)), settings.image_space_radius, 2.0);
-    let v_x = low_value(b.nearest);
-    let h_x = v_x.x + v_x.y;
-    let v = array<vec2<f32>, 4>(
-        low_value(bracket_texel(b, 0)),
-        low_value(bracket_texel(b, 1)),
-        low_value(bracket_texel(b, 2)),
-        low_value(bracket_texel(b, 3)),
+    blend_at(x, p, n, a, b, c, d);
+}
+
+// `blend` once the pixel's surface is known.
+fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, a: Texel, b: Texel, c: Texel, d: Texel) {
+    let h_x = a.value.x + a.value.y;
+    let w = vec4<f32>(
+        weight(a, x, p, n, h_x),
+        weight(b, x, p, n, h_x),
+        weight(c, x, p, n, h_x),
+        weight(d, x, p, n, h_x),
     );
-    let w = b.weights * vec4<f32>(
-        wendland(abs(h_x - (v[0].x + v[0].y)), 1.0),
-        wendland(abs(h_x - (v[1].x + v[1].y)), 1.0),
-        wendland(abs(h_x - (v[2].x + v[2].y)), 1.0),
-        wendland(abs(h_x - (v[3].x + v[3].y)), 1.0),
-    );
-    let sum = w.x * v[0] + w.y * v[1] + w.z * v[2] + w.w * v[3];
+    let sum = w.x * a.value + w.y * b.value + w.z * c.value + w.w * d.value;
     let weights = w.x + w.y + w.z + w.w;
-    textureStore(output, x, vec4<f32>(select(v_x, sum / weights, weights > 0.0), 0.0, 0.0));
+    textureStore(output, x, vec4<f32>(select(a.value, sum / weights, weights > 0.0), 0.0, 0.0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
+    let dims = vec2<i32>(textureDimensions(depth_texture));
+    let low_dims = vec2<i32>(textureDimensions(low));
+    let l = vec2<i32>(id.xy);
+    let x = l * 2;
+    if any(x >= dims) {
+        return;
+    }
+    // The 3 × 3 texels around l, named by their offsets (m = −1, o = 0, p = +1; x first).
+    let oo = texel(l, low_dims);
+    let mo = texel(l + vec2<i32>(-1, 0), low_dims);
+    let po = texel(l + vec2<i32>(1, 0), low_dims);
+    let om = texel(l + vec2<i32>(0, -1), low_dims);
+    let op = texel(l + vec2<i32>(0, 1), low_dims);
+    let mm = texel(l + vec2<i32>(-1, -1), low_dims);
+    let pm = texel(l + vec2<i32>(1, -1), low_dims);
+    let mp = texel(l + vec2<i32>(-1, 1), low_dims);
+    let pp = texel(l + vec2<i32>(1, 1), low_dims);
+    // An even coordinate is bracketed towards −1, an odd one towards +1 (texel l sits on 2l).
+    if oo.guide.on_surface {
+        blend_at(x, oo.guide.p, oo.guide.n, oo, mo, om, mm);
+    } else {
+        textureStore(output, x, vec4<f32>(0.0));
+    }
+    let x1 = x + vec2<i32>(1, 0);
+    blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), oo, po, om, pm);
+    let x2 = x + vec2<i32>(0, 1);
+    blend(x2, dims, textureLoad(depth_texture, min(x2, dims - 1), 0), oo, mo, op, mp);
+    let x3 = x + vec2<i32>(1, 1);
+    blend(x3, dims, textureLoad(depth_texture, min(x3, dims - 1), 0), oo, po, op, pp);
 }

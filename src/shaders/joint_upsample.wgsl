@@ -2,8 +2,9 @@
 // (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): the 2 × 2 texels that bracket the pixel
 // (those bilinear interpolation would read), each weighted by the Wendland kernel (eq. 3) over
 // screen distance, normal difference and world distance to the pixel it was computed at (texel l
-// at pixel 2l). Used by the filter's upsampling of the image-space and voxel terms (which also
-// weigh the AO difference) and by compose for the sphere and field splats.
+// at pixel 2l). Used by compose for the sphere and field splats (`bracket`), and by the filter's
+// upsampling of the image-space and voxel terms (`texel_guide` and `guide_weight`, which it
+// shares across a 2 × 2 quad of pixels and joins with an AO-difference weight).
 // `reference::filter` is the CPU twin.
 
 #define_import_path bevy_dynamic_ao::joint_upsample
@@ -31,6 +32,53 @@ fn bracket_texel(b: Bracket, k: i32) -> vec2<i32> {
     return b.nearest + b.toward * vec2<i32>(k & 1, k >> 1u);
 }
 
+// The surface texel `l` of a half-resolution buffer was computed at: full-resolution pixel
+// `y` = 2l, its world position `p` and unit normal `n`; `on_surface` is false where the texel
+// lies off the buffer or on the background (it then counts for no pixel).
+struct Guide {
+    y: vec2<i32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    on_surface: bool,
+}
+
+// The guide of texel `l` in a buffer of `low_dims` texels, over the ND-buffer `depth_texture` /
+// `normal_texture`.
+fn texel_guide(
+    view: View,
+    depth_texture: texture_depth_2d,
+    normal_texture: texture_2d<f32>,
+    l: vec2<i32>,
+    low_dims: vec2<i32>,
+) -> Guide {
+    let dims = vec2<i32>(textureDimensions(depth_texture));
+    var g = Guide(l * 2, vec3<f32>(0.0), vec3<f32>(0.0), false);
+    if any(l < vec2<i32>(0)) || any(l >= low_dims) || any(g.y >= dims) {
+        return g;
+    }
+    let dq = textureLoad(depth_texture, g.y, 0);
+    if dq <= 0.0 {
+        return g;
+    }
+    g.p = world_position(view, g.y, vec2<f32>(dims), dq);
+    g.n = decode_normal(textureLoad(normal_texture, g.y, 0).xyz);
+    g.on_surface = true;
+    return g;
+}
+
+// The weight of the texel with guide `g` for pixel `x` (world position `p`, unit normal `n`):
+// `reach` (metres) is the support of the world-distance weight, `bend` that of the normal
+// weight.
+fn guide_weight(g: Guide, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, reach: f32, bend: f32) -> f32 {
+    if !g.on_surface {
+        return 0.0;
+    }
+    let w_d = wendland(length(vec2<f32>(x - g.y)), WINDOW);
+    let w_n = wendland(1.0 - dot(n, g.n), bend);
+    let w_p = wendland(distance(p, g.p), reach);
+    return w_d * w_n * w_p;
+}
+
 // The weight of texel `l` for pixel `x` (world position `p`, unit normal `n`).
 fn texel_weight(
     view: View,
@@ -44,19 +92,8 @@ fn texel_weight(
     reach: f32,
     bend: f32,
 ) -> f32 {
-    let dims = vec2<i32>(textureDimensions(depth_texture));
-    let y = l * 2;
-    if any(l < vec2<i32>(0)) || any(l >= low_dims) || any(y >= dims) {
-        return 0.0;
-    }
-    let dq = textureLoad(depth_texture, y, 0);
-    if dq <= 0.0 {
-        return 0.0;
-    }
-    let w_d = wendland(length(vec2<f32>(x - y)), WINDOW);
-    let w_n = wendland(1.0 - dot(n, decode_normal(textureLoad(normal_texture, y, 0).xyz)), bend);
-    let w_p = wendland(distance(p, world_position(view, y, vec2<f32>(dims), dq)), reach);
-    return w_d * w_n * w_p;
+    let g = texel_guide(view, depth_texture, normal_texture, l, low_dims);
+    return guide_weight(g, x, p, n, reach, bend);
 }
 
 // The bracket of pixel `x` (world position `p`, unit normal `n`) in a buffer of `low_dims`

@@ -106,19 +106,25 @@ pub(crate) fn voxel_pass(
         record_passes(&mut ctx, "dynamic_ao_voxel_temporal", false, &[step]);
     }
 
-    let mut passes = vec![("dynamic_ao_voxel_upsample", upsample, &bind_groups.upsample)];
+    // The upsampling runs one invocation per 2 × 2 pixels (`filter/upsample.wgsl`).
+    let mut passes = vec![(
+        "dynamic_ao_voxel_upsample",
+        upsample,
+        &bind_groups.upsample,
+        (size + 1) / 2,
+    )];
     if let Some(groups) = &bind_groups.blur {
-        passes.push(("dynamic_ao_voxel_blur_x", blur_x, &groups.x));
-        passes.push(("dynamic_ao_voxel_blur_y", blur_y, &groups.y));
+        passes.push(("dynamic_ao_voxel_blur_x", blur_x, &groups.x, size));
+        passes.push(("dynamic_ao_voxel_blur_y", blur_y, &groups.y, size));
     }
     let steps: Vec<ComputeStep> = passes
         .into_iter()
-        .map(|(label, pipeline, bind_group)| ComputeStep {
+        .map(|(label, pipeline, bind_group, texels)| ComputeStep {
             label,
             pipeline,
             bind_group,
             offsets: &offsets,
-            texels: size,
+            texels,
         })
         .collect();
     record_passes(&mut ctx, "dynamic_ao_voxel_filter", false, &steps);
