@@ -110,11 +110,12 @@ impl Frame {
     pub fn position(&self, i: usize) -> Option<Vec3> {
         let t = self.nd.front[i];
         (t.depth > 0.0).then(|| {
+            let width = self.nd.width as usize;
             self.view.world_position(
-                (i % WIDTH as usize) as i32,
-                (i / WIDTH as usize) as i32,
-                WIDTH,
-                HEIGHT,
+                (i % width) as i32,
+                (i / width) as i32,
+                self.nd.width,
+                self.nd.height,
                 t.depth,
             )
         })
@@ -126,8 +127,8 @@ impl Frame {
             bvh,
             &self.view,
             &GroundTruthSettings {
-                width: WIDTH,
-                height: HEIGHT,
+                width: self.nd.width,
+                height: self.nd.height,
                 radius,
                 rays_per_pixel: 256,
             },
@@ -300,19 +301,26 @@ impl Gpu {
 
     /// Adds another camera with its own settings, image target and read-back.
     pub fn add_camera(&mut self, transform: Transform, ao: DynamicAo) -> (Entity, AoReadback) {
+        self.add_camera_of_size(transform, ao, UVec2::new(WIDTH, HEIGHT))
+    }
+
+    /// [`Gpu::add_camera`] rendering `size` pixels (odd sizes included).
+    pub fn add_camera_of_size(
+        &mut self,
+        transform: Transform,
+        ao: DynamicAo,
+        size: UVec2,
+    ) -> (Entity, AoReadback) {
         let world = self.app.world_mut();
         let target = world
             .resource_mut::<Assets<Image>>()
             .add(Image::new_target_texture(
-                WIDTH,
-                HEIGHT,
+                size.x,
+                size.y,
                 TextureFormat::Rgba8UnormSrgb,
                 None,
             ));
-        let readback = AoReadback::new(
-            &mut world.resource_mut::<Assets<Image>>(),
-            UVec2::new(WIDTH, HEIGHT),
-        );
+        let readback = AoReadback::new(&mut world.resource_mut::<Assets<Image>>(), size);
         let camera = world
             .spawn((
                 Camera3d::default(),
@@ -359,7 +367,15 @@ impl Gpu {
         let [Some(visibility), Some(front), Some(back)] = slots else {
             panic!("the GPU read-back did not complete in 60 frames");
         };
-        let (w, h) = (WIDTH as usize, HEIGHT as usize);
+        // The read-back's own size: a camera's viewport may differ from the harness's.
+        let size = self
+            .app
+            .world()
+            .resource::<Assets<Image>>()
+            .get(&readback.visibility)
+            .expect("read-back image")
+            .size();
+        let (w, h) = (size.x as usize, size.y as usize);
         let texels = |data: &[u8]| -> Vec<NdTexel> {
             common::unpad_f32(data, w, h, 4)
                 .chunks_exact(4)
@@ -369,8 +385,8 @@ impl Gpu {
         Frame {
             visibility: common::unpad_f32(&visibility, w, h, 1),
             nd: NdBuffer {
-                width: WIDTH,
-                height: HEIGHT,
+                width: size.x,
+                height: size.y,
                 front: texels(&front),
                 back: texels(&back),
             },

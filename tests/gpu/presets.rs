@@ -160,7 +160,7 @@ fn the_default_keeps_detail_on_third_party_models() {
             scene.name,
             error / bevy
         );
-        // Measured: 0.13–0.41 × Bevy's RMSE; high-frequency error 0.013–0.038 against Bevy's
+        // Measured: 0.12–0.40 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
         // 0.032–0.044.
         assert!(
             error <= 0.45 * bevy,
