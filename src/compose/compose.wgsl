@@ -19,7 +19,7 @@
 // half resolution: each pixel then blends the texels that bracket it (`joint_upsample`).
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel}
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
 #import bevy_dynamic_ao::joint_upsample::{Bracket, bracket, bracket_texel}
 
@@ -132,5 +132,5 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let at = visibility_pixel(settings, pixel, textureDimensions(visibility), dims);
-    textureStore(visibility, at, vec4<f32>(1.0 - clamp(occlusion, 0.0, 1.0)));
+    textureStore(visibility, at, vec4<f32>(visibility_of(occlusion)));
 }

@@ -9,7 +9,9 @@
 //! environment specular only, so direct lights are never darkened. Bevy's own SSAO pass is
 //! skipped on views where ours runs, by removing its pipeline id once our pipelines are ready
 //! (and runs again if one of them stops compiling, see `failed`). The sphere and field splats may
-//! arrive at half resolution; a second variant of the pass upsamples them on the way.
+//! arrive at half resolution; a second variant of the pass upsamples them on the way. On a view
+//! with no far-field term there is nothing to combine: the filter's last pass writes the
+//! visibility itself and this pass does not run.
 //!
 //! The debug view draws the same visibility over the lit image, full screen.
 
@@ -19,6 +21,7 @@ mod node;
 mod pipeline;
 mod ssao_slot;
 
+pub(crate) use pipeline::bevy_ssao_format;
 pub(crate) use ssao_slot::{ParkedSsao, visibility_texture};
 
 use bevy::app::{App, Plugin};

@@ -14,7 +14,7 @@ use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
 use crate::dispatch::{ComputeStep, record_passes};
-use crate::view::{DynamicAoUniform, DynamicAoView};
+use crate::view::{DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
 
 pub(crate) fn compose_pass(
     view: ViewQuery<(
@@ -24,14 +24,17 @@ pub(crate) fn compose_pass(
         &DynamicUniformIndex<DynamicAoUniform>,
         &ViewUniformOffset,
         Has<AoPassesReady>,
+        Has<FilterWritesVisibility>,
     )>,
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, ao_view, bind_group, settings_index, view_offset, ready) = view.into_inner();
-    // Until every pass of the view has compiled, Bevy's SSAO still writes the texture.
-    if !ao_view.replaces_bevy_ssao() || !ready {
+    let (camera, ao_view, bind_group, settings_index, view_offset, ready, filter_wrote) =
+        view.into_inner();
+    // Until every pass of the view has compiled, Bevy's SSAO still writes the texture; where
+    // the filter's last pass wrote it, nothing is left to combine.
+    if !ao_view.replaces_bevy_ssao() || !ready || filter_wrote {
         return;
     }
     let (Some(size), Some(compute_pipeline)) = (

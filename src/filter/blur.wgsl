@@ -1,20 +1,37 @@
 // Separable cross-bilateral blur of the occlusion buffer (Bavoil & Sainz 2008, "Cross Bilateral
-// Filter"), of one channel or, with TWO_CHANNELS, of the two of far-field occlusion.
-// `reference::filter` is the CPU twin.
+// Filter"), of one channel or, with TWO_CHANNELS, of the two of far-field occlusion. With
+// VISIBILITY the Y pass writes the texture Bevy's PBR reads, as compose would have
+// (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
 #import bevy_dynamic_ao::nd_buffer::linear_depth
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth: texture_depth_2d;
 @group(0) @binding(3) var input: texture_2d<f32>;
-#ifdef TWO_CHANNELS
+#ifdef VISIBILITY_R16FLOAT
+@group(0) @binding(4) var output: texture_storage_2d<r16float, write>;
+#else ifdef VISIBILITY
+@group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
+#else ifdef TWO_CHANNELS
 @group(0) @binding(4) var output: texture_storage_2d<rg32float, write>;
 #else
 @group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
 #endif
+
+// Writes the blurred `value` of `pixel`: occlusion, or with VISIBILITY the visibility at the
+// viewport's place in Bevy's texture.
+fn store(pixel: vec2<i32>, value: vec2<f32>) {
+#ifdef VISIBILITY
+    let dims = vec2<u32>(textureDimensions(depth));
+    let at = visibility_pixel(settings, pixel, textureDimensions(output), dims);
+    textureStore(output, at, vec4<f32>(visibility_of(value.x)));
+#else
+    textureStore(output, pixel, vec4<f32>(value, 0.0, 0.0));
+#endif
+}
 
 // The channels a texel of `input` carries.
 fn input_value(q: vec2<i32>) -> vec2<f32> {
@@ -37,7 +54,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
     }
     let center_depth = textureLoad(depth, pixel, 0);
     if center_depth <= 0.0 {
-        textureStore(output, pixel, vec4<f32>(0.0));
+        store(pixel, vec2<f32>(0.0));
         return;
     }
     let z0 = depth_ahead(center_depth);
@@ -65,7 +82,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         sum += w * input_value(q);
         weights += w;
     }
-    textureStore(output, pixel, vec4<f32>(sum / weights, 0.0, 0.0));
+    store(pixel, sum / weights);
 }
 
 @compute @workgroup_size(8, 8, 1)

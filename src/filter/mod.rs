@@ -15,6 +15,11 @@
 //! its view-depth difference from the centre pixel, so occlusion does not bleed across
 //! silhouettes. Sharpness 0 gives a plain Gaussian. Pixels that show no geometry take no part.
 //! `reference::filter` is the CPU twin.
+//!
+//! On a view without far-field terms the last of these passes (the blur's Y pass, or the
+//! upsampling where the blur is off) writes the visibility Bevy's PBR reads itself, where compose
+//! would only have copied it: one full-resolution pass fewer, the same values
+//! (`DynamicAoView::filter_is_last`).
 
 mod node;
 mod pipeline;

@@ -4,14 +4,31 @@ use bevy::ecs::prelude::*;
 use bevy::render::{
     camera::ExtractedCamera,
     extract_component::DynamicUniformIndex,
-    render_resource::PipelineCache,
+    render_resource::{BindGroup, CachedComputePipelineId, ComputePipeline, PipelineCache},
     renderer::{RenderContext, ViewQuery},
     view::ViewUniformOffset,
 };
 
-use super::pipeline::{BlurBindGroups, BlurPipelines, UpsampleBindGroup};
+use super::pipeline::{BlurBindGroups, BlurPipelines, UpsampleBindGroup, VisibilityBindGroup};
+use crate::compose::AoPassesReady;
 use crate::dispatch::{ComputeStep, record_passes};
 use crate::view::DynamicAoUniform;
+
+/// The pipeline and bind group of a view's last filter pass: `own`, or once our passes write
+/// Bevy's texture and the view has one, the variant that writes visibility there.
+fn last_pass<'a>(
+    cache: &'a PipelineCache,
+    own: (CachedComputePipelineId, &'a BindGroup),
+    to_visibility: CachedComputePipelineId,
+    visibility: Option<&'a VisibilityBindGroup>,
+    ready: bool,
+) -> Option<(&'a ComputePipeline, &'a BindGroup)> {
+    let (id, bind_group) = match visibility.filter(|_| ready) {
+        Some(visibility) => (to_visibility, &visibility.0),
+        None => own,
+    };
+    Some((cache.get_compute_pipeline(id)?, bind_group))
+}
 
 pub(crate) fn blur_pass(
     view: ViewQuery<(
@@ -19,23 +36,31 @@ pub(crate) fn blur_pass(
         &BlurBindGroups,
         &ViewUniformOffset,
         &DynamicUniformIndex<DynamicAoUniform>,
+        Option<&VisibilityBindGroup>,
+        Has<AoPassesReady>,
     )>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, bind_groups, view_offset, settings_index) = view.into_inner();
-    let (Some(size), Some(x), Some(y)) = (
+    let (camera, bind_groups, view_offset, settings_index, visibility, ready) = view.into_inner();
+    let (Some(size), Some(x), Some((y, y_bind_group))) = (
         camera.physical_viewport_size,
         pipeline_cache.get_compute_pipeline(pipelines.one.x),
-        pipeline_cache.get_compute_pipeline(pipelines.one.y),
+        last_pass(
+            &pipeline_cache,
+            (pipelines.one.y, &bind_groups.y),
+            pipelines.to_visibility.y,
+            visibility,
+            ready,
+        ),
     ) else {
         return;
     };
     let offsets = [view_offset.offset, settings_index.index()];
     let steps = [
         ("dynamic_ao_blur_x", x, &bind_groups.x),
-        ("dynamic_ao_blur_y", y, &bind_groups.y),
+        ("dynamic_ao_blur_y", y, y_bind_group),
     ]
     .map(|(label, pipeline, bind_group)| ComputeStep {
         label,
@@ -53,22 +78,34 @@ pub(crate) fn upsample_pass(
         &UpsampleBindGroup,
         &ViewUniformOffset,
         &DynamicUniformIndex<DynamicAoUniform>,
+        Option<&BlurBindGroups>,
+        Option<&VisibilityBindGroup>,
+        Has<AoPassesReady>,
     )>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, bind_group, view_offset, settings_index) = view.into_inner();
-    let (Some(size), Some(pipeline)) = (
+    let (camera, bind_group, view_offset, settings_index, blur, visibility, ready) =
+        view.into_inner();
+    // Where the blur runs, its Y pass is the last and the upsampling writes occlusion.
+    let visibility = visibility.filter(|_| blur.is_none());
+    let (Some(size), Some((pipeline, bind_group))) = (
         camera.physical_viewport_size,
-        pipeline_cache.get_compute_pipeline(pipelines.one.upsample),
+        last_pass(
+            &pipeline_cache,
+            (pipelines.one.upsample, &bind_group.0),
+            pipelines.to_visibility.upsample,
+            visibility,
+            ready,
+        ),
     ) else {
         return;
     };
     let step = ComputeStep {
         label: "dynamic_ao_upsample",
         pipeline,
-        bind_group: &bind_group.0,
+        bind_group,
         offsets: &[view_offset.offset, settings_index.index()],
         // One invocation per 2 × 2 pixels (`upsample.wgsl`).
         texels: (size + 1) / 2,

@@ -1,20 +1,25 @@
 //! Pipelines and bind groups of the blur.
 
 use crate::nd_buffer::FrontLayer;
+use bevy::asset::Handle;
 use bevy::asset::load_embedded_asset;
 use bevy::ecs::prelude::*;
+use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
 use bevy::render::{
     render_resource::{
         binding_types::{texture_2d, texture_depth_2d, texture_storage_2d, uniform_buffer},
         *,
     },
-    renderer::RenderDevice,
+    renderer::{RenderAdapter, RenderDevice},
     view::ViewUniform,
 };
+use bevy::shader::{Shader, ShaderDefVal};
 use bevy::utils::default;
 
+use crate::compose::{ParkedSsao, bevy_ssao_format, visibility_texture};
 use crate::view::{
-    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, ViewBindings,
+    DynamicAoTextures, DynamicAoUniform, DynamicAoView, FilterWritesVisibility, OCCLUSION_FORMAT,
+    ViewBindings,
 };
 
 /// The blur and upsampling pipelines for one kind of occlusion buffer.
@@ -36,23 +41,21 @@ impl FilterPipelines {
 }
 
 /// Filters for one-channel occlusion (the image-space techniques) and for two-channel far-field
-/// occlusion (voxel volumes: the near field's share and the rest, see `FarFieldBlend`).
+/// occlusion (voxel volumes: the near field's share and the rest, see `FarFieldBlend`), and the
+/// one-channel filter's last pass writing visibility.
 #[derive(Resource)]
 pub(crate) struct BlurPipelines {
     pub one: FilterPipelines,
     pub two: FilterPipelines,
+    pub to_visibility: VisibilityPipelines,
 }
 
 /// Format of two-channel occlusion buffers.
 pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
 
-fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
-    let (format, shader_defs, suffix): (_, Vec<bevy::shader::ShaderDefVal>, _) = if two_channels {
-        (OCCLUSION_PAIR_FORMAT, vec!["TWO_CHANNELS".into()], "_pair")
-    } else {
-        (OCCLUSION_FORMAT, Vec::new(), "")
-    };
-    let layout = BindGroupLayoutDescriptor::new(
+/// The bind group layouts of the blur and of the upsampling, writing `format`.
+fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 2] {
+    let blur = BindGroupLayoutDescriptor::new(
         format!("dynamic_ao_blur{suffix}_layout"),
         &BindGroupLayoutEntries::sequential(
             ShaderStages::COMPUTE,
@@ -65,7 +68,7 @@ fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
             ),
         ),
     );
-    let upsample_layout = BindGroupLayoutDescriptor::new(
+    let upsample = BindGroupLayoutDescriptor::new(
         format!("dynamic_ao_upsample{suffix}_layout"),
         &BindGroupLayoutEntries::sequential(
             ShaderStages::COMPUTE,
@@ -79,40 +82,98 @@ fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
             ),
         ),
     );
+    [blur, upsample]
+}
+
+/// What a set of filter pipelines writes: its output format, the shader definitions that select
+/// it, and the suffix of its labels.
+struct Variant {
+    format: TextureFormat,
+    shader_defs: Vec<ShaderDefVal>,
+    suffix: &'static str,
+}
+
+impl Variant {
+    /// Queues the pipeline of entry point `entry` (`blur_x`, `blur_y` or `upsample`) of `shader`.
+    fn queue(
+        &self,
+        world: &World,
+        entry: &str,
+        layout: &BindGroupLayoutDescriptor,
+        shader: Handle<Shader>,
+    ) -> CachedComputePipelineId {
+        world
+            .resource::<PipelineCache>()
+            .queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(format!("dynamic_ao_{entry}{}_pipeline", self.suffix).into()),
+                layout: vec![layout.clone()],
+                shader,
+                shader_defs: self.shader_defs.clone(),
+                entry_point: Some(entry.to_string().into()),
+                ..default()
+            })
+    }
+}
+
+fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
+    let variant = if two_channels {
+        Variant {
+            format: OCCLUSION_PAIR_FORMAT,
+            shader_defs: vec!["TWO_CHANNELS".into()],
+            suffix: "_pair",
+        }
+    } else {
+        Variant {
+            format: OCCLUSION_FORMAT,
+            shader_defs: Vec::new(),
+            suffix: "",
+        }
+    };
+    let [layout, upsample_layout] = layouts(variant.format, variant.suffix);
     let blur = load_embedded_asset!(world, "blur.wgsl");
     let upsample = load_embedded_asset!(world, "upsample.wgsl");
-    let cache = world.resource::<PipelineCache>();
-    let pipeline = |label: String, layout: &BindGroupLayoutDescriptor, shader, entry: &str| {
-        cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some(label.into()),
-            layout: vec![layout.clone()],
-            shader,
-            shader_defs: shader_defs.clone(),
-            entry_point: Some(entry.to_string().into()),
-            ..default()
-        })
-    };
     FilterPipelines {
-        x: pipeline(
-            format!("dynamic_ao_blur_x{suffix}_pipeline"),
-            &layout,
-            blur.clone(),
-            "blur_x",
-        ),
-        y: pipeline(
-            format!("dynamic_ao_blur_y{suffix}_pipeline"),
-            &layout,
-            blur,
-            "blur_y",
-        ),
-        upsample: pipeline(
-            format!("dynamic_ao_upsample{suffix}_pipeline"),
-            &upsample_layout,
-            upsample,
-            "upsample",
-        ),
+        x: variant.queue(world, "blur_x", &layout, blur.clone()),
+        y: variant.queue(world, "blur_y", &layout, blur),
+        upsample: variant.queue(world, "upsample", &upsample_layout, upsample),
         layout,
         upsample_layout,
+    }
+}
+
+/// The last filter pass of a view without far-field terms, writing the visibility Bevy's PBR
+/// reads in its texture's format (`DynamicAoView::filter_is_last`): compose would only copy it
+/// there, a full-resolution pass of its own.
+pub(crate) struct VisibilityPipelines {
+    pub layout: BindGroupLayoutDescriptor,
+    pub upsample_layout: BindGroupLayoutDescriptor,
+    /// The blur's Y pass.
+    pub y: CachedComputePipelineId,
+    /// The upsampling, where the blur is off.
+    pub upsample: CachedComputePipelineId,
+}
+
+impl VisibilityPipelines {
+    fn new(world: &mut World) -> Self {
+        let format = bevy_ssao_format(world.resource::<RenderAdapter>());
+        let mut shader_defs: Vec<ShaderDefVal> = vec!["VISIBILITY".into()];
+        if format == TextureFormat::R16Float {
+            shader_defs.push("VISIBILITY_R16FLOAT".into());
+        }
+        let variant = Variant {
+            format,
+            shader_defs,
+            suffix: "_visibility",
+        };
+        let [layout, upsample_layout] = layouts(format, variant.suffix);
+        let blur = load_embedded_asset!(world, "blur.wgsl");
+        let upsample = load_embedded_asset!(world, "upsample.wgsl");
+        Self {
+            y: variant.queue(world, "blur_y", &layout, blur),
+            upsample: variant.queue(world, "upsample", &upsample_layout, upsample),
+            layout,
+            upsample_layout,
+        }
     }
 }
 
@@ -121,6 +182,7 @@ impl FromWorld for BlurPipelines {
         Self {
             one: filter_pipelines(world, false),
             two: filter_pipelines(world, true),
+            to_visibility: VisibilityPipelines::new(world),
         }
     }
 }
@@ -198,22 +260,38 @@ pub(crate) struct BlurBindGroups {
 #[derive(Component)]
 pub(crate) struct UpsampleBindGroup(pub BindGroup);
 
+/// The bind group of the last filter pass where it writes visibility
+/// ([`FilterWritesVisibility`]): the blur's Y pass (scratch → visibility), or the upsampling
+/// (half-size occlusion → visibility) where the blur is off.
+#[derive(Component)]
+pub(crate) struct VisibilityBindGroup(pub BindGroup);
+
 pub(crate) fn prepare_blur_bind_groups(
     mut commands: Commands,
     render_device: Res<RenderDevice>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
     bindings: ViewBindings,
-    views: Query<(Entity, &DynamicAoTextures, FrontLayer, &DynamicAoView)>,
+    views: Query<(
+        Entity,
+        &DynamicAoTextures,
+        FrontLayer,
+        &DynamicAoView,
+        Option<&ScreenSpaceAmbientOcclusionResources>,
+        Option<&ParkedSsao>,
+    )>,
 ) {
     let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
-    for (entity, textures, prepass, view) in &views {
+    for (entity, textures, prepass, view, resources, parked) in &views {
         let Some(depth) = prepass.depth() else {
-            commands
-                .entity(entity)
-                .remove::<(UpsampleBindGroup, BlurBindGroups)>();
+            commands.entity(entity).remove::<(
+                UpsampleBindGroup,
+                BlurBindGroups,
+                VisibilityBindGroup,
+                FilterWritesVisibility,
+            )>();
             continue;
         };
         let inputs = FilterInputs {
@@ -222,7 +300,8 @@ pub(crate) fn prepare_blur_bind_groups(
             depth,
         };
         let occlusion = &textures.full_occlusion.default_view;
-        match prepass.normal().filter(|_| view.half_resolution) {
+        let half_normal = prepass.normal().filter(|_| view.half_resolution);
+        match half_normal {
             Some(normal) => {
                 commands.entity(entity).insert(UpsampleBindGroup(
                     pipelines.one.upsample_bind_group(
@@ -237,6 +316,53 @@ pub(crate) fn prepare_blur_bind_groups(
             }
             None => {
                 commands.entity(entity).remove::<UpsampleBindGroup>();
+            }
+        }
+        let to_visibility = &pipelines.to_visibility;
+        let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
+        let visibility = visibility_texture(resources, parked)
+            .filter(|_| view.filter_is_last())
+            .map(|texture| &texture.default_view);
+        let last = match (visibility, view.blur_radius, half_normal) {
+            (Some(visibility), 1.., _) if ready(to_visibility.y) => {
+                Some(render_device.create_bind_group(
+                    "dynamic_ao_blur_y_visibility_bind_group",
+                    &pipeline_cache.get_bind_group_layout(&to_visibility.layout),
+                    &BindGroupEntries::sequential((
+                        inputs.view.clone(),
+                        inputs.settings.clone(),
+                        inputs.depth,
+                        &textures.blur_scratch.default_view,
+                        visibility,
+                    )),
+                ))
+            }
+            (Some(visibility), 0, Some(normal)) if ready(to_visibility.upsample) => {
+                Some(render_device.create_bind_group(
+                    "dynamic_ao_upsample_visibility_bind_group",
+                    &pipeline_cache.get_bind_group_layout(&to_visibility.upsample_layout),
+                    &BindGroupEntries::sequential((
+                        inputs.view.clone(),
+                        inputs.settings.clone(),
+                        inputs.depth,
+                        normal,
+                        &textures.near_occlusion.default_view,
+                        visibility,
+                    )),
+                ))
+            }
+            _ => None,
+        };
+        match last {
+            Some(bind_group) => {
+                commands
+                    .entity(entity)
+                    .insert((VisibilityBindGroup(bind_group), FilterWritesVisibility));
+            }
+            None => {
+                commands
+                    .entity(entity)
+                    .remove::<(VisibilityBindGroup, FilterWritesVisibility)>();
             }
         }
         if view.blur_radius == 0 {

@@ -7,11 +7,12 @@
 // cost more than the half-resolution AO it upsampled. One invocation upsamples the 2 × 2 pixels
 // of one texel, whose brackets lie within the 3 × 3 texels around it: each texel's depth,
 // normal, position and value are read once for the four (9 texels instead of 16), and the
-// quad's first pixel is the texel's own. `reference::filter` is the CPU twin.
+// quad's first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
+// as compose would have (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
-#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
 #import bevy_dynamic_ao::math::wendland
 #import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
 
@@ -20,11 +21,27 @@
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
 @group(0) @binding(4) var low: texture_2d<f32>;
-#ifdef TWO_CHANNELS
+#ifdef VISIBILITY_R16FLOAT
+@group(0) @binding(5) var output: texture_storage_2d<r16float, write>;
+#else ifdef VISIBILITY
+@group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
+#else ifdef TWO_CHANNELS
 @group(0) @binding(5) var output: texture_storage_2d<rg32float, write>;
 #else
 @group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
 #endif
+
+// Writes the upsampled `value` of pixel `x`: occlusion, or with VISIBILITY the visibility at the
+// viewport's place in Bevy's texture.
+fn store(x: vec2<i32>, value: vec2<f32>) {
+#ifdef VISIBILITY
+    let dims = vec2<u32>(textureDimensions(depth_texture));
+    let at = visibility_pixel(settings, x, textureDimensions(output), dims);
+    textureStore(output, at, vec4<f32>(visibility_of(value.x)));
+#else
+    textureStore(output, x, vec4<f32>(value, 0.0, 0.0));
+#endif
+}
 
 // The channels a texel of `low` carries.
 fn low_value(l: vec2<i32>) -> vec2<f32> {
@@ -61,7 +78,7 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel
         return;
     }
     if depth <= 0.0 {
-        textureStore(output, x, vec4<f32>(0.0));
+        store(x, vec2<f32>(0.0));
         return;
     }
     let p = world_position(view, x, vec2<f32>(dims), depth);
@@ -80,7 +97,7 @@ fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, a: Texel, b: Texel, c: Tex
     );
     let sum = w.x * a.value + w.y * b.value + w.z * c.value + w.w * d.value;
     let weights = w.x + w.y + w.z + w.w;
-    textureStore(output, x, vec4<f32>(select(a.value, sum / weights, weights > 0.0), 0.0, 0.0));
+    store(x, select(a.value, sum / weights, weights > 0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -106,7 +123,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     if oo.guide.on_surface {
         blend_at(x, oo.guide.p, oo.guide.n, oo, mo, om, mm);
     } else {
-        textureStore(output, x, vec4<f32>(0.0));
+        store(x, vec2<f32>(0.0));
     }
     let x1 = x + vec2<i32>(1, 0);
     blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), oo, po, om, pm);

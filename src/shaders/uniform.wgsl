@@ -82,3 +82,8 @@ fn visibility_pixel(
     }
     return pixel + vec2<i32>(settings.viewport_origin);
 }
+
+// What Bevy's PBR reads for `occlusion`: visibility, 1 = open.
+fn visibility_of(occlusion: f32) -> f32 {
+    return 1.0 - clamp(occlusion, 0.0, 1.0);
+}

@@ -137,7 +137,21 @@ impl DynamicAoView {
     pub fn replaces_bevy_ssao(&self) -> bool {
         self.technique() != AoTechnique::BevySsao
     }
+
+    /// Whether the last filter pass (the blur's Y pass, or the upsampling where the blur is
+    /// off) may write the visibility Bevy's PBR reads itself: an image-space technique with a
+    /// filter pass and no far-field term, where compose would only copy the filtered occlusion.
+    pub fn filter_is_last(&self) -> bool {
+        self.technique().is_image_space()
+            && !self.far_terms.contains(&true)
+            && (self.blur_radius > 0 || self.half_resolution)
+    }
 }
+
+/// Marks a view whose last filter pass writes the visibility Bevy's PBR reads
+/// ([`DynamicAoView::filter_is_last`], once that pass's variant has compiled): compose skips it.
+#[derive(Component)]
+pub(crate) struct FilterWritesVisibility;
 
 /// The far-field output of each term on a view, for compose: the technique that owns the term
 /// makes and writes it while the term takes part. Renewed empty at every extraction.
