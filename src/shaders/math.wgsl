@@ -25,21 +25,3 @@ fn tangent_frame(n: vec3<f32>) -> mat3x3<f32> {
     let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
     return mat3x3<f32>(t, bt, n);
 }
-
-// A unit vector as two numbers (octahedral mapping): fold the octahedron |x| + |y| + |z| = 1
-// onto the square [-1, 1]², its lower half over the corners. `octahedral_decode` inverts it.
-fn octahedral_encode(n: vec3<f32>) -> vec2<f32> {
-    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if n.z >= 0.0 {
-        return p;
-    }
-    return (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
-}
-
-fn octahedral_decode(p: vec2<f32>) -> vec3<f32> {
-    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
-    let t = max(-n.z, 0.0);
-    n.x += select(t, -t, n.x >= 0.0);
-    n.y += select(t, -t, n.y >= 0.0);
-    return normalize(n);
-}

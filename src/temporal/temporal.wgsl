@@ -2,12 +2,11 @@
 // channels): this frame's value joins the pixel's history, found where the surface was last
 // frame through Bevy's motion vectors. The history is read bilinearly from the four texels around
 // that place, each kept only where its depth and normal match this surface (a disocclusion keeps
-// none), and clamped around this frame's values on the same surface nearby, so a
+// none), and clamped around this frame's values on the same plane nearby, so a
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
-#import bevy_dynamic_ao::math::{octahedral_decode, octahedral_encode}
 
 struct TemporalUniform {
     // 1: every history is dropped this frame.
@@ -41,14 +40,17 @@ struct TemporalUniform {
 const DEPTH_TOLERANCE: f32 = 0.05;
 // ... and the cosine between its normal and the surface's is at least this.
 const NORMAL_AGREEMENT: f32 = 0.9;
-// The image-space history is clamped to the mean of this frame's values on the same surface
-// around the texel, give or take GAMMA standard errors of that mean plus CLAMP_MARGIN (for the shading's
+// The image-space history is clamped to the mean of this frame's values on the texel's plane
+// around it, give or take GAMMA standard errors of that mean plus CLAMP_MARGIN (for the shading's
 // own slope across the window). The spread of single values would not do: from 2 rays a pixel
 // reads 0, ½ or 1, so the values' range spans most of [0, 1] and a shadow whose occluder has
 // moved away stays inside it (the motion benchmark's trail behind the sliding box: 95 pixels
 // with the range, about 24 with this).
 const GAMMA: f32 = 1.5;
 const CLAMP_MARGIN: f32 = 0.05;
+// A texel of the window lies on the texel's plane where its linear depth is within this share of
+// the depth that plane predicts there.
+const PLANE_TOLERANCE: f32 = 0.02;
 // Texels each side of the window (5 × 5 at the accumulated texture's resolution).
 const WINDOW: i32 = 2;
 // A history the clamp moved by more than CUT saw a change: it counts as at most CLAMPED_FRAMES
@@ -74,12 +76,13 @@ fn load_value(texel: vec2<i32>) -> vec2<f32> {
 // Texels along each side of a workgroup's tile: its 8 × 8 texels and the window around them.
 const TILE: i32 = 8 + 2 * WINDOW;
 // Each texel of a workgroup's tile, read once: the 5 × 5 windows of its 64 texels overlap, and
-// reading depth, normal and value for each of the 25 taps was most of the pass. One vec4 per
-// texel, because on lavapipe a read from workgroup memory costs about what a texture read does
-// (three arrays saved nothing; one vec4 took the pass from about 8.5 to 6 ms at 640 × 480):
-// this frame's value (both channels with PAIR, which needs no more), its linear depth (0 where
-// no surface is) and its normal's octahedral coordinates.
-var<workgroup> tile: array<vec4<f32>, TILE * TILE>;
+// reading depth and value for each of the 25 taps was most of the pass. One vec2 per texel,
+// because on lavapipe a read from workgroup memory costs about what a texture read does, per
+// channel: this frame's value and its linear depth (0 where no surface is), or both channels
+// with PAIR. The window tells surfaces apart by depth against the texel's plane, without
+// normals: they were two more channels and a decoding per tap, and the plane test has a converged
+// error no higher than theirs (BENCHMARKS.md, "The clamp window tests depth against a plane").
+var<workgroup> tile: array<vec2<f32>, TILE * TILE>;
 
 // Fills the tile of the workgroup whose first texel is `corner`: tile texel t holds texel
 // `corner - WINDOW + t`, clamped to the texture as the window's reads were.
@@ -87,17 +90,14 @@ fn load_tile(corner: vec2<i32>, lane: i32, dims: vec2<i32>, full: vec2<i32>) {
     for (var i = lane; i < TILE * TILE; i += 64) {
         let q = clamp(corner - WINDOW + vec2<i32>(i % TILE, i / TILE), vec2<i32>(0), dims - 1);
 #ifdef PAIR
-        tile[i] = vec4<f32>(load_value(q), 0.0, 0.0);
+        tile[i] = load_value(q);
 #else
         let q_pixel = min(q * i32(temporal.scale), full - 1);
         let q_depth = textureLoad(front_depth, q_pixel, 0);
-        let q_normal = decode_normal(textureLoad(front_normal, q_pixel, 0).xyz);
         let q_uv = (vec2<f32>(q_pixel) + 0.5) / vec2<f32>(full);
-        let on_surface = q_depth > 0.0 && dot(q_normal, q_normal) > 0.0;
-        tile[i] = vec4<f32>(
+        tile[i] = vec2<f32>(
             load_value(q).x,
-            select(0.0, linear_depth(view, q_uv, q_depth), on_surface),
-            select(vec2<f32>(0.0), octahedral_encode(q_normal), on_surface),
+            select(0.0, linear_depth(view, q_uv, q_depth), q_depth > 0.0),
         );
 #endif
     }
@@ -145,7 +145,7 @@ fn range_bounds(local: vec2<i32>, value: vec2<f32>) -> array<vec2<f32>, 2> {
     var hi = value;
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
-            let v = tile[tile_index(local, vec2<i32>(dx, dy))].xy;
+            let v = tile[tile_index(local, vec2<i32>(dx, dy))];
             lo = min(lo, v);
             hi = max(hi, v);
         }
@@ -153,16 +153,33 @@ fn range_bounds(local: vec2<i32>, value: vec2<f32>) -> array<vec2<f32>, 2> {
     return array<vec2<f32>, 2>(lo - vec2<f32>(CLAMP_MARGIN), hi + vec2<f32>(CLAMP_MARGIN));
 }
 
-// Mean of this frame's values on the same surface in the window, give or take GAMMA standard
-// errors of it and CLAMP_MARGIN.
-fn mean_bounds(local: vec2<i32>, z: f32, n: vec3<f32>) -> array<vec2<f32>, 2> {
+// The change of linear depth per texel along x and y at the workgroup's texel `local` (depth
+// `z`), the plane the window's texels are held against: along each axis the smaller of the
+// one-sided differences, so that a silhouette beside the texel does not tilt it.
+fn depth_slope(local: vec2<i32>, z: f32) -> vec2<f32> {
+    let ahead = vec2<f32>(
+        tile[tile_index(local, vec2<i32>(1, 0))].y,
+        tile[tile_index(local, vec2<i32>(0, 1))].y,
+    ) - z;
+    let behind = z - vec2<f32>(
+        tile[tile_index(local, vec2<i32>(-1, 0))].y,
+        tile[tile_index(local, vec2<i32>(0, -1))].y,
+    );
+    return select(behind, ahead, abs(ahead) < abs(behind));
+}
+
+// Mean of this frame's values on the texel's plane in the window, give or take GAMMA standard
+// errors of it and CLAMP_MARGIN. A background texel (depth 0) lies on no plane.
+fn mean_bounds(local: vec2<i32>, z: f32) -> array<vec2<f32>, 2> {
+    let slope = depth_slope(local, z);
     var sum = vec2<f32>(0.0);
     var sum_sq = vec2<f32>(0.0);
     var on_surface = 0.0;
     for (var dy = -WINDOW; dy <= WINDOW; dy++) {
         for (var dx = -WINDOW; dx <= WINDOW; dx++) {
             let t = tile[tile_index(local, vec2<i32>(dx, dy))];
-            if !same_surface(t.y, octahedral_decode(t.zw), z, n) {
+            let predicted = z + dot(slope, vec2<f32>(f32(dx), f32(dy)));
+            if abs(t.y - predicted) > PLANE_TOLERANCE * z {
                 continue;
             }
             let v = vec2<f32>(t.x, 0.0);
@@ -209,7 +226,7 @@ fn accumulate(
     let bounds = range_bounds(local, value);
     let cut = 0.0;
 #else
-    let bounds = mean_bounds(local, z, n);
+    let bounds = mean_bounds(local, z);
     let cut = CUT;
 #endif
     let lo = bounds[0];
