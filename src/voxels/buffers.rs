@@ -69,6 +69,15 @@ impl VoxelBuffers {
         self.grid.as_ref()
     }
 
+    /// Cells per axis of the finest grid in use (0 with none).
+    pub fn largest_resolution(&self) -> u32 {
+        self.volumes.values()[..self.counts.volumes as usize]
+            .iter()
+            .map(|v| v.resolution)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// Whether a volume in use asks for its occupied voxels to be drawn.
     pub fn any_shown(&self) -> bool {
         self.volumes.values()[..self.counts.volumes as usize]

@@ -50,7 +50,11 @@ pub(crate) fn voxel_pass(
     let diagnostics = diagnostics.as_deref();
 
     if buffers.needs_voxelizing
-        && let (Some(grid), Some(bind_group)) = (buffers.grid(), &buffers.voxelize_bind_group)
+        && let (Some(grid), Some(bind_group), Some(fill_interior)) = (
+            buffers.grid(),
+            &buffers.voxelize_bind_group,
+            pipeline_cache.get_compute_pipeline(pipelines.fill_interior),
+        )
     {
         ctx.command_encoder()
             .clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
@@ -70,6 +74,10 @@ pub(crate) fn voxel_pass(
                 // limit.
                 let x = triangles.min(MAX_WORKGROUPS);
                 pass.dispatch_workgroups(x, triangles.div_ceil(x), 1);
+                // One invocation per column of the largest grid, one row per volume.
+                pass.set_pipeline(fill_interior);
+                let columns = buffers.largest_resolution().pow(2);
+                pass.dispatch_workgroups(columns.div_ceil(64), buffers.counts.volumes, 1);
                 pass_span.end(&mut pass);
             }
         }
@@ -139,8 +147,10 @@ pub(crate) fn wait_for_voxels(
     mut views: Query<(&DynamicAoView, &mut PendingPasses)>,
 ) {
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
-    let all_ready =
-        ready(pipelines.voxelize) && ready(pipelines.sample) && blur.two.ready(&pipeline_cache);
+    let all_ready = ready(pipelines.voxelize)
+        && ready(pipelines.fill_interior)
+        && ready(pipelines.sample)
+        && blur.two.ready(&pipeline_cache);
     let temporal_ready = temporal.ready(&pipeline_cache, Channels::Pair);
     for (view, mut pending) in &mut views {
         if view.has(FarTerm::Voxels) {

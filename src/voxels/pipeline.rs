@@ -30,6 +30,8 @@ pub(crate) struct VoxelPipelines {
     voxelize_layout: BindGroupLayoutDescriptor,
     sample_layout: BindGroupLayoutDescriptor,
     pub voxelize: CachedComputePipelineId,
+    /// Carries the interior flips of closed meshes up their columns (`voxelize.wgsl`).
+    pub fill_interior: CachedComputePipelineId,
     pub sample: CachedComputePipelineId,
 }
 
@@ -69,6 +71,14 @@ impl FromWorld for VoxelPipelines {
             label: Some("dynamic_ao_voxelize_pipeline".into()),
             layout: vec![voxelize_layout.clone()],
             shader: load_embedded_asset!(world, "voxelize.wgsl"),
+            entry_point: Some("voxelize".into()),
+            ..default()
+        });
+        let fill_interior = cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some("dynamic_ao_fill_interior_pipeline".into()),
+            layout: vec![voxelize_layout.clone()],
+            shader: load_embedded_asset!(world, "voxelize.wgsl"),
+            entry_point: Some("fill_interior".into()),
             ..default()
         });
         let sample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
@@ -81,6 +91,7 @@ impl FromWorld for VoxelPipelines {
             voxelize_layout,
             sample_layout,
             voxelize,
+            fill_interior,
             sample,
         }
     }

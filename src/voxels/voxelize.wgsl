@@ -66,9 +66,11 @@ fn owns(e: f32, a: vec2<f32>, b: vec2<f32>) -> bool {
     return e > 0.0 || (e == 0.0 && (d.y > 0.0 || (d.y == 0.0 && d.x < 0.0)));
 }
 
-// Interior of closed meshes (parity along z): the triangle flips the interior bit of every cell
-// whose centre lies above it, in every column whose centre it covers; cells below an odd number
-// of surfaces end up set.
+// Interior of closed meshes (parity along z): in every column whose centre it covers, the
+// triangle flips the interior bit of the lowest cell whose centre lies above it, and
+// `fill_interior` then carries each flip up its column, so that cells above an odd number of
+// surfaces end up set. Flipping every cell above the surface here instead cost one atomic per
+// cell per triangle: a floor slab alone rewrote the whole grid, 16 ms at 256³ on a GPU.
 fn fill_closed(volume: VoxelVolume, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, lane: u32) {
     let area = edge_value(a.xy, b.xy, c.xy);
     if area == 0.0 {
@@ -103,9 +105,52 @@ fn fill_closed(volume: VoxelVolume, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, la
             continue;
         }
         let z = (e0 * p0.z + e1 * p1.z + e2 * p2.z) / abs(area);
-        for (var k = max(i32(floor(z - 0.5)) + 1, 0); k < n; k++) {
+        let k = max(i32(floor(z - 0.5)) + 1, 0);
+        if k < n {
             let i = u32(x + n * (y + n * k));
             atomicXor(&grid[params.solid_offset + volume.offset + i / 32u], 1u << (i % 32u));
+        }
+    }
+}
+
+// The running XOR up each column of the flips `fill_closed` left: afterwards a cell's interior
+// bit is the parity of the closed surfaces below its centre. Invocation `id.x` of row `id.y`
+// (a volume) takes one word of a z layer where layers fill whole words (resolution a multiple
+// of 8), the 32 columns of its bits at once; otherwise one column (x, y), whose bits only it
+// touches while its neighbours flip theirs in the same words.
+@compute @workgroup_size(64, 1, 1)
+fn fill_interior(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.y >= params.volumes {
+        return;
+    }
+    let volume = volumes[id.y];
+    let n = volume.resolution;
+    let base = params.solid_offset + volume.offset;
+    let columns = n * n;
+    if columns % 32u == 0u {
+        let words = columns / 32u;
+        if id.x >= words {
+            return;
+        }
+        var parity = 0u;
+        for (var k = 0u; k < n; k++) {
+            let w = base + id.x + words * k;
+            parity ^= atomicLoad(&grid[w]);
+            atomicStore(&grid[w], parity);
+        }
+        return;
+    }
+    let column = id.x;
+    if column >= columns {
+        return;
+    }
+    var parity = 0u;
+    for (var k = 0u; k < n; k++) {
+        let i = column + n * n * k;
+        let flipped = (atomicLoad(&grid[base + i / 32u]) >> (i % 32u)) & 1u;
+        parity ^= flipped;
+        if parity != flipped {
+            atomicXor(&grid[base + i / 32u], 1u << (i % 32u));
         }
     }
 }

@@ -198,7 +198,8 @@ fn gpu_voxelization_matches_a_cpu_triangle_cell_voxelization() {
             )),
         );
     let mut gpu = Gpu::new(&scene, voxels_only());
-    // A turned volume and a second, coarser one overlapping it: several grids per frame.
+    // A turned volume and a second, coarser one overlapping it: several grids per frame. 64³
+    // layers fill whole 32-bit words and 22³ ones do not, the two ways the interior is filled.
     let turned = spawn_volume(
         &mut gpu,
         Transform::from_xyz(0.0, 0.6, 0.0).with_rotation(Quat::from_rotation_y(0.5)),
@@ -213,7 +214,7 @@ fn gpu_voxelization_matches_a_cpu_triangle_cell_voxelization() {
         Transform::from_xyz(0.5, 0.5, 0.5),
         VoxelAoVolume {
             half_extents: Vec3::splat(1.5),
-            resolution: 24,
+            resolution: 22,
             ..default()
         },
     );
@@ -235,7 +236,7 @@ fn gpu_voxelization_matches_a_cpu_triangle_cell_voxelization() {
             .map(|(m, t)| (m.clone(), t.compute_affine()))
             .collect::<Vec<_>>(),
     );
-    for (name, (info, grid)) in ["turned 64³", "coarse 24³"]
+    for (name, (info, grid)) in ["turned 64³", "coarse 22³"]
         .into_iter()
         .zip(read_grids(&mut gpu, &[turned, coarse]))
     {
