@@ -67,20 +67,18 @@ impl FromWorld for VoxelPipelines {
             ),
         );
         let cache = world.resource::<PipelineCache>();
-        let voxelize = cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some("dynamic_ao_voxelize_pipeline".into()),
-            layout: vec![voxelize_layout.clone()],
-            shader: load_embedded_asset!(world, "voxelize.wgsl"),
-            entry_point: Some("voxelize".into()),
-            ..default()
-        });
-        let fill_interior = cache.queue_compute_pipeline(ComputePipelineDescriptor {
-            label: Some("dynamic_ao_fill_interior_pipeline".into()),
-            layout: vec![voxelize_layout.clone()],
-            shader: load_embedded_asset!(world, "voxelize.wgsl"),
-            entry_point: Some("fill_interior".into()),
-            ..default()
-        });
+        // Two entry points of one shader on the same bindings.
+        let voxelize_step = |label: &str, entry: &str| {
+            cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(label.to_string().into()),
+                layout: vec![voxelize_layout.clone()],
+                shader: load_embedded_asset!(world, "voxelize.wgsl"),
+                entry_point: Some(entry.to_string().into()),
+                ..default()
+            })
+        };
+        let voxelize = voxelize_step("dynamic_ao_voxelize_pipeline", "voxelize");
+        let fill_interior = voxelize_step("dynamic_ao_fill_interior_pipeline", "fill_interior");
         let sample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
             label: Some("dynamic_ao_voxel_ao_pipeline".into()),
             layout: vec![sample_layout.clone()],

@@ -70,7 +70,8 @@ fn owns(e: f32, a: vec2<f32>, b: vec2<f32>) -> bool {
 // triangle flips the interior bit of the lowest cell whose centre lies above it, and
 // `fill_interior` then carries each flip up its column, so that cells above an odd number of
 // surfaces end up set. Flipping every cell above the surface here instead cost one atomic per
-// cell per triangle: a floor slab alone rewrote the whole grid, 16 ms at 256³ on a GPU.
+// cell per triangle: a wall across the grid's columns rewrote most of the grid, 16 ms at 256³
+// on a GPU.
 fn fill_closed(volume: VoxelVolume, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, lane: u32) {
     let area = edge_value(a.xy, b.xy, c.xy);
     if area == 0.0 {

@@ -196,6 +196,16 @@ fn gpu_voxelization_matches_a_cpu_triangle_cell_voxelization() {
                 0.7,
                 0.2,
             )),
+        )
+        // Thin, large closed occluders that reach past both volumes: a wall across every
+        // column of the grids' z axis and a slab under the floor.
+        .with(
+            Cuboid::new(8.0, 4.0, 0.1),
+            Transform::from_xyz(0.0, 1.0, -1.3),
+        )
+        .with(
+            Cuboid::new(8.0, 0.1, 8.0),
+            Transform::from_xyz(0.0, -0.3, 0.0),
         );
     let mut gpu = Gpu::new(&scene, voxels_only());
     // A turned volume and a second, coarser one overlapping it: several grids per frame. 64³
