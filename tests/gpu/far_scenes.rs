@@ -170,7 +170,7 @@ pub struct FarRun {
     /// The voxel volume for the radius it was placed for.
     volume: Option<(Entity, f32)>,
     /// The image-space settings `render` uses where it asks for the near field (technique,
-    /// budgets, resolution, accumulation): the near field by default.
+    /// budgets, resolution, accumulation, blur): the near field by default.
     pub image_space: DynamicAo,
 }
 
@@ -288,6 +288,7 @@ impl FarRun {
             ao.horizon = image_space.horizon;
             ao.ray_march = image_space.ray_march;
             ao.half_resolution = image_space.half_resolution;
+            ao.blur = image_space.blur;
             ao.temporal = image_space.temporal;
             ao.radius = radius;
             ao.far_field_blend = blend;

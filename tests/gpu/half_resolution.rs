@@ -153,7 +153,6 @@ fn the_last_filter_pass_writes_the_cpu_visibility_on_third_party_models() {
                 ..plain_ao().with_radius(radius)
             };
             run.image_space = ao.clone();
-            run.gpu.set_ao(|settings| settings.blur = ao.blur);
             let frame = run.render(true, None, FarFieldBlend::CountOnce, radius);
             let mask = frame.geometry_mask();
             let cpu = cpu_half_resolution(&frame, &ao, radius);
