@@ -23,6 +23,7 @@ mod examples;
 mod far_field;
 mod far_scenes;
 mod fields;
+mod fine_detail;
 mod half_resolution;
 mod harness;
 mod horizon;
