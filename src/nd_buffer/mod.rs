@@ -6,7 +6,9 @@
 //! the nearest back faces, through a mesh phase of our own that reuses Bevy's mesh pipeline, so
 //! skinned and morph-target meshes deform exactly as in the front layer. Both layers use the
 //! same encoding: reverse-Z `Depth32Float` depth and world-space normals stored as `n*0.5+0.5` in
-//! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`.
+//! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`. The back layer's
+//! normals are drawn only where the near field reads them; for every other technique the layer
+//! is depth only, drawn without a fragment stage.
 
 mod front_layer;
 mod node;

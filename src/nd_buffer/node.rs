@@ -41,17 +41,23 @@ pub(crate) fn back_face_pass(
     let diagnostics = diagnostics.as_deref();
 
     // The layer is cleared even when nothing is drawn: an empty layer reads as "no surface".
+    // Its normals are a target only where the near field reads them (see `BackFaceKey`).
+    let normals = ao_view.back_normals.then(|| RenderPassColorAttachment {
+        view: &textures.back_normal.default_view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: Operations {
+            load: LoadOp::Clear(Default::default()),
+            store: StoreOp::Store,
+        },
+    });
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
         label: Some("dynamic_ao_back_faces"),
-        color_attachments: &[Some(RenderPassColorAttachment {
-            view: &textures.back_normal.default_view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: Operations {
-                load: LoadOp::Clear(Default::default()),
-                store: StoreOp::Store,
-            },
-        })],
+        color_attachments: if normals.is_some() {
+            std::slice::from_ref(&normals)
+        } else {
+            &[]
+        },
         depth_stencil_attachment: Some(RenderPassDepthStencilAttachment {
             view: &textures.back_depth.default_view,
             depth_ops: Some(Operations {

@@ -36,7 +36,8 @@ pub struct AoReadback {
     /// Front layer: world-space unit normal in `rgb`, reverse-Z depth in `a` (0 = nothing),
     /// `Rgba32Float`.
     pub front: Handle<Image>,
-    /// Back-face layer, same layout as `front`. All zero when the back layer is off.
+    /// Back-face layer, same layout as `front`. All zero when the back layer is off; the normal
+    /// is zero unless the near field reads it (the other techniques draw the layer's depth only).
     pub back: Handle<Image>,
 }
 

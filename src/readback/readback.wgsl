@@ -27,5 +27,10 @@ fn readback(@builtin(global_invocation_id) id: vec3<u32>) {
     textureStore(visibility_out, pixel, vec4<f32>(open));
     textureStore(front_out, pixel, vec4<f32>(decode_normal(textureLoad(front_normal, pixel, 0).xyz), depth));
     let back = textureLoad(back_depth, pixel, 0);
-    textureStore(back_out, pixel, vec4<f32>(decode_normal(textureLoad(back_normal, pixel, 0).xyz), back));
+    // Only the near field's layer holds normals; the others draw depth alone.
+    var back_n = vec3<f32>(0.0);
+    if settings.near_field_back_layer != 0u {
+        back_n = decode_normal(textureLoad(back_normal, pixel, 0).xyz);
+    }
+    textureStore(back_out, pixel, vec4<f32>(back_n, back));
 }

@@ -7,8 +7,8 @@ struct DynamicAoUniform {
     // Reach of the image-space technique, metres: R, or the near-field radius under CountOnce.
     image_space_radius: f32,
     intensity: f32,
-    // Near field: most and fewest samples per receiver and layer, 1 when the back-face layer
-    // occludes.
+    // Near field: most and fewest samples per receiver and layer, 1 when the near field runs
+    // with the back-face layer (the one case whose layer holds normals).
     near_field_max_samples: u32,
     near_field_min_samples: u32,
     near_field_back_layer: u32,

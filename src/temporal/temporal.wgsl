@@ -212,15 +212,22 @@ fn accumulate(
         return;
     }
     let pixel = min(texel * i32(temporal.scale), full - 1);
+    let uv = (vec2<f32>(pixel) + 0.5) / vec2<f32>(full);
+#ifdef PAIR
     let value = load_value(texel);
     let depth = textureLoad(front_depth, pixel, 0);
+    let z = select(0.0, linear_depth(view, uv, depth), depth > 0.0);
+#else
+    // The tile already holds this texel's value and linear depth (0 on the background).
+    let own = tile[tile_index(local, vec2<i32>(0))];
+    let value = vec2<f32>(own.x, 0.0);
+    let z = own.y;
+#endif
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
-    if depth <= 0.0 || dot(n, n) == 0.0 {
+    if z <= 0.0 || dot(n, n) == 0.0 {
         store(texel, value, 0.0, 0.0, vec3<f32>(0.0));
         return;
     }
-    let uv = (vec2<f32>(pixel) + 0.5) / vec2<f32>(full);
-    let z = linear_depth(view, uv, depth);
 
 #ifdef PAIR
     let bounds = range_bounds(local, value);

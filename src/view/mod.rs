@@ -107,7 +107,11 @@ impl FarTermsPresent {
 pub(crate) struct DynamicAoView {
     /// The camera's component as the user set it; each technique reads its own settings here.
     pub settings: DynamicAo,
+    /// The back-face layer is drawn (its depth).
     pub back_layer: bool,
+    /// The back-face layer's normals are drawn too: only the near field reads them. Without,
+    /// the layer is depth only, which rasterizes without a fragment shader.
+    pub back_normals: bool,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.

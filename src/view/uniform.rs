@@ -21,8 +21,8 @@ pub(crate) struct DynamicAoUniform {
     /// field counts the rest.
     pub image_space_radius: f32,
     pub intensity: f32,
-    /// [`crate::NearFieldParams`]; `near_field_back_layer` is 1 when the back-face layer
-    /// occludes.
+    /// [`crate::NearFieldParams`]; `near_field_back_layer` is 1 when the near field runs with
+    /// the back-face layer, the one case that draws the layer's normals.
     pub near_field_max_samples: u32,
     pub near_field_min_samples: u32,
     pub near_field_back_layer: u32,
@@ -159,11 +159,13 @@ pub(super) fn extract_views(
         if temporal {
             blur.radius = blur.radius.div_ceil(2);
         }
-        let back_layer = (near_field && params.back_layer) || ao.technique == AoTechnique::RayMarch;
+        let back_normals = near_field && params.back_layer;
+        let back_layer = back_normals || ao.technique == AoTechnique::RayMarch;
         entity_commands.insert((
             DynamicAoView {
                 settings: ao.clone(),
                 back_layer,
+                back_normals,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
                 far_half_resolution: ao.half_resolution,
@@ -178,7 +180,7 @@ pub(super) fn extract_views(
                 intensity: ao.effective_intensity(),
                 near_field_max_samples: params.max_samples,
                 near_field_min_samples: params.min_samples,
-                near_field_back_layer: u32::from(params.back_layer),
+                near_field_back_layer: u32::from(back_normals),
                 image_space: u32::from(image_space),
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,

@@ -7,10 +7,9 @@ use bevy_dynamic_ao::reference::metrics::rmse;
 
 use crate::harness::{Gpu, SceneSpec, plain_ao};
 
-#[test]
-fn back_faces_occlude_the_floor_next_to_a_box() {
-    let radius = 0.75;
-    let scene = SceneSpec::new(Transform::from_xyz(0.0, 4.0, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
+/// A unit box on a 10 m floor, seen from 4 m straight above.
+fn box_on_floor_from_above() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(0.0, 4.0, 0.0).looking_at(Vec3::ZERO, -Vec3::Z))
         .with(
             Plane3d::default().mesh().size(10.0, 10.0).build(),
             Transform::IDENTITY,
@@ -18,7 +17,13 @@ fn back_faces_occlude_the_floor_next_to_a_box() {
         .with(
             Cuboid::new(1.0, 1.0, 1.0),
             Transform::from_xyz(0.0, 0.5, 0.0),
-        );
+        )
+}
+
+#[test]
+fn back_faces_occlude_the_floor_next_to_a_box() {
+    let radius = 0.75;
+    let scene = box_on_floor_from_above();
     let with_back = |back_layer| {
         plain_ao()
             .with_radius(radius)
@@ -107,4 +112,57 @@ fn meshes_without_a_material_are_in_neither_layer() {
     let front = frame.nd.front.iter().filter(|t| t.depth > 0.0).count();
     let back = frame.nd.back.iter().filter(|t| t.depth > 0.0).count();
     assert_eq!((front, back), (0, 0), "front {front}, back {back} pixels");
+}
+
+/// Only the near field reads the back layer's normals; the ray march draws the layer's depth
+/// alone, without a fragment stage. The depth is the same either way, the read-back normal is
+/// zero where none is drawn, and switching the technique back brings the normals back.
+#[test]
+fn the_back_layer_draws_normals_only_for_the_near_field() {
+    let scene = box_on_floor_from_above();
+    let near_field = plain_ao().with_technique(AoTechnique::NearField);
+    let mut gpu = Gpu::new(&scene, near_field.clone());
+    let with_normals = gpu.frame(4);
+    gpu.set_ao(|ao| *ao = near_field.clone().with_technique(AoTechnique::RayMarch));
+    let depth_only = gpu.frame(4);
+    gpu.set_ao(|ao| *ao = near_field.clone());
+    let again = gpu.frame(4);
+
+    let drawn = |frame: &crate::harness::Frame| {
+        frame
+            .nd
+            .back
+            .iter()
+            .filter(|t| t.depth > 0.0)
+            .map(|t| t.normal)
+            .collect::<Vec<_>>()
+    };
+    let (first, second, third) = (drawn(&with_normals), drawn(&depth_only), drawn(&again));
+    assert!(
+        first.len() > 500,
+        "the back layer should hold the box's sides ({})",
+        first.len()
+    );
+    // Seen from above, the box's back faces are its sides and its bottom: unit normals,
+    // horizontal or pointing down, away from the camera.
+    for normals in [&first, &third] {
+        assert!(
+            normals
+                .iter()
+                .all(|n| (n.length() - 1.0).abs() < 0.01 && n.y < 0.01),
+            "near field: the back layer's normals should be the box's outward normals"
+        );
+    }
+    assert!(
+        second.iter().all(|n| *n == Vec3::ZERO),
+        "ray march: the back layer should hold no normals"
+    );
+    for (a, b) in with_normals.nd.back.iter().zip(&depth_only.nd.back) {
+        assert!(
+            (a.depth - b.depth).abs() < 1e-6,
+            "the depth-only layer differs: {} against {}",
+            b.depth,
+            a.depth
+        );
+    }
 }
