@@ -91,7 +91,7 @@
 //!
 //! | paper | equation | file |
 //! | --- | --- | --- |
-//! | Shanmugam & Arikan 2007 | §4.1–4.2 ND-buffer, two layers | `shaders/nd_buffer.wgsl`, `nd_buffer/back_faces.wgsl` |
+//! | Shanmugam & Arikan 2007 | §4.1–4.2 ND-buffer, two layers | `shaders/nd_buffer.wgsl`, `nd_buffer/layer_normals.wgsl` |
 //! | | eq. 2–3, occlusion by one sphere | `shaders/sphere_occlusion.wgsl` |
 //! | | eq. 2–4, near field | `near_field/near_field.wgsl` |
 //! | | §5.2 splatting, eq. 5 d_far | `spheres/splat.wgsl`, `spheres/component.rs` (`far_field_reach`) |

@@ -15,11 +15,14 @@
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
 //! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
 //! temporal accumulation (on above `low`; `--temporal` and `--no-temporal` override it).
-//! `--frames N` renders N frames with a still camera before the capture (default: 4, or 32
-//! where the occlusion is accumulated, twice its history, so the capture shows it converged). `--timings` then prints one line, `timings: ao_gpu_ms=<mean GPU ms of the AO passes>
-//! frame_gpu_ms=<all passes> frames=<n>`, over the frames rendered once the scene was ready (for
-//! `bevy-ssao` the AO pass is Bevy's own). `--msaa 4` renders with 4 samples per pixel (default
-//! 1, off; the AO passes read sample 0 of each pixel).
+//! `--frames N` renders N frames with a still camera before the capture, counted from the frame
+//! the scene is ready, where an accumulated history starts over, so that captures are
+//! reproducible (default: 4, or 32 where the occlusion is accumulated, twice its history, so the
+//! capture shows it converged). `--timings` then prints one line,
+//! `timings: ao_gpu_ms=<mean GPU ms of the AO passes> frame_gpu_ms=<all passes> frames=<n>`, over
+//! the frames rendered once the scene was ready (for `bevy-ssao` the AO pass is Bevy's own).
+//! `--msaa 4` renders with 4 samples per pixel (default 1, off; the AO passes read a
+//! single-sampled front layer that holds what a prepass without MSAA would).
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
@@ -116,6 +119,7 @@ fn main() {
         failure: None,
         volume: None,
         stage_start: 0,
+        counting: false,
         placing: None,
         started: Instant::now(),
     })
@@ -156,6 +160,10 @@ struct Capture {
     volume: Option<Entity>,
     /// The frame rendering began.
     stage_start: u32,
+    /// Whether the frames counted by `--frames` have begun: from the first frame the scene is
+    /// ready, with the AO's history started over there (where it accumulates), so that every
+    /// capture of a view accumulates the same frames.
+    counting: bool,
     /// The read-back of the front ND layer the voxel volume is placed from, while it runs.
     placing: Option<Arc<Mutex<Option<Vec<u8>>>>>,
     /// When the run began.
@@ -383,6 +391,7 @@ fn drive(
     assets: Res<AssetServer>,
     fields: Query<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>,
     mut diagnostics: Option<ResMut<DiagnosticsStore>>,
+    mut ours: Query<&mut DynamicAo, With<AoReadback>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
@@ -393,6 +402,17 @@ fn drive(
         && !fields.iter().any(|(active, pending)| !active || pending);
     if !ready && let Some(store) = diagnostics.as_deref_mut() {
         timings::forget(store);
+    }
+    if ready && !capture.counting && matches!(capture.stage, Stage::Rendering { .. }) {
+        capture.counting = true;
+        capture.stage = Stage::Rendering {
+            until: capture.frames + capture.options.frames,
+        };
+        for mut ao in &mut ours {
+            if ao.temporal.enabled {
+                ao.temporal.reset = true;
+            }
+        }
     }
     if let Some(failure) = capture.failure.take() {
         eprintln!("ao_capture: {failure}");

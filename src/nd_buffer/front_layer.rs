@@ -11,21 +11,33 @@
 //! (depth, normals and, where the camera has them, motion vectors), so that no pass needs a
 //! multisampled variant or a viewport offset. The passes reconstruct each pixel at its centre,
 //! where no sample of a multisampled pixel lies, so of such a pixel it keeps what a
-//! single-sampled prepass would show there: where the samples lie on one surface, their mean
-//! (the standard sample positions are centred on the pixel); at a silhouette, the surface most
-//! samples see, its depth carried to the centre along its plane (an average of two surfaces
-//! would be a point on neither). `front_layer.wgsl` says why a sample's own depth is not enough.
+//! single-sampled prepass would show there. Which surface that is, no sample says: at a
+//! silhouette the samples see two, and a triangle thinner than a pixel can cover its centre and
+//! none of its samples. So on an MSAA camera the opaque meshes are first drawn again,
+//! single-sampled, through the mesh phase [`CentreSample3d`]: depth and vertex normals at pixel
+//! centres. The copy keeps that depth, and takes the normal (normal-mapped, as Bevy's prepass
+//! draws it) and the motion vector of the sample that lies on the same surface; where none does
+//! and every sample lies behind the centre's surface (a sliver in front), the centre's own
+//! normal. Where a sample lies in front of it, the centre sample missed a mesh (an alpha-masked
+//! one, whose discarded fragments only its material knows), and the copy falls back to the
+//! samples alone: their mean where they lie on one surface (the standard sample positions are
+//! centred on the pixel), and at a silhouette the surface most samples see, its depth carried to
+//! the centre along its plane (an average of two surfaces would be a point on neither).
+//! `front_layer.wgsl` says why a sample's own depth is not enough.
 
 use bevy::asset::{Handle, load_embedded_asset};
+use bevy::camera::Viewport;
 use bevy::core_pipeline::FullscreenShader;
 use bevy::core_pipeline::prepass::{
     MOTION_VECTOR_PREPASS_FORMAT, MotionVectorPrepass, ViewPrepassTextures,
 };
 use bevy::ecs::prelude::*;
 use bevy::ecs::query::QueryData;
+use bevy::log::error;
 use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
+    render_phase::{SortedRenderPhase, ViewSortedRenderPhases},
     render_resource::{
         binding_types::{
             texture_2d, texture_2d_multisampled, texture_depth_2d, texture_depth_2d_multisampled,
@@ -35,11 +47,12 @@ use bevy::render::{
     },
     renderer::{RenderContext, RenderDevice, ViewQuery},
     texture::{CachedTexture, TextureCache},
-    view::{Msaa, ViewUniform, ViewUniformOffset, ViewUniforms},
+    view::{ExtractedView, Msaa, ViewUniform, ViewUniformOffset, ViewUniforms},
 };
 use bevy::shader::Shader;
 use bevy::utils::default;
 
+use super::phase::CentreSample3d;
 use crate::view::{
     DEPTH_FORMAT, DynamicAoView, NORMAL_FORMAT, PendingPasses, view_size, view_texture,
 };
@@ -111,8 +124,23 @@ pub(crate) struct FrontLayerCopy {
     depth: CachedTexture,
     normal: CachedTexture,
     motion_vectors: Option<CachedTexture>,
+    /// The opaque meshes' single-sampled depth and normals (MSAA cameras): which surface each
+    /// pixel's centre shows.
+    centre: Option<CentreSample>,
     pipeline: CachedRenderPipelineId,
     key: CopyKey,
+}
+
+/// Format of the centre sample's depth gradient: reverse-Z depth per pixel in x and y, to full
+/// precision (the copy tells a sample on the centre's triangle from one on its neighbour by
+/// differences of a millionth of the depth).
+pub(crate) const DEPTH_GRADIENT_FORMAT: TextureFormat = TextureFormat::Rg32Float;
+
+/// The textures of [`CentreSample3d`], the size of the viewport.
+struct CentreSample {
+    depth: CachedTexture,
+    normal: CachedTexture,
+    depth_gradient: CachedTexture,
 }
 
 /// What the copy pass reads.
@@ -160,6 +188,12 @@ fn layout(key: CopyKey) -> BindGroupLayoutDescriptor {
     ];
     if key.motion_vectors {
         entries.push(float.build(3, ShaderStages::FRAGMENT));
+    }
+    if key.multisampled {
+        entries.push(texture_depth_2d().build(4, ShaderStages::FRAGMENT));
+        let float = texture_2d(TextureSampleType::Float { filterable: false });
+        entries.push(float.build(5, ShaderStages::FRAGMENT));
+        entries.push(float.build(6, ShaderStages::FRAGMENT));
     }
     BindGroupLayoutDescriptor::new("dynamic_ao_front_layer_copy_layout", &entries)
 }
@@ -256,6 +290,11 @@ pub(crate) fn prepare_front_layer_copies(
                     MOTION_VECTOR_PREPASS_FORMAT,
                 )
             }),
+            centre: key.multisampled.then(|| CentreSample {
+                depth: texture("dynamic_ao_centre_depth", DEPTH_FORMAT),
+                normal: texture("dynamic_ao_centre_normal", NORMAL_FORMAT),
+                depth_gradient: texture("dynamic_ao_centre_depth_gradient", DEPTH_GRADIENT_FORMAT),
+            }),
             pipeline: pipelines.specialize(&pipeline_cache, &pipeline, key),
             key,
         });
@@ -314,6 +353,20 @@ pub(crate) fn prepare_front_layer_copy_bind_groups(
                 resource: BindingResource::TextureView(motion_vectors),
             });
         }
+        if let Some(centre) = &copy.centre {
+            entries.push(BindGroupEntry {
+                binding: 4,
+                resource: BindingResource::TextureView(&centre.depth.default_view),
+            });
+            entries.push(BindGroupEntry {
+                binding: 5,
+                resource: BindingResource::TextureView(&centre.normal.default_view),
+            });
+            entries.push(BindGroupEntry {
+                binding: 6,
+                resource: BindingResource::TextureView(&centre.depth_gradient.default_view),
+            });
+        }
         let bind_group = render_device.create_bind_group(
             "dynamic_ao_front_layer_copy_bind_group",
             &pipeline_cache.get_bind_group_layout(&layout(copy.key)),
@@ -325,30 +378,29 @@ pub(crate) fn prepare_front_layer_copy_bind_groups(
     }
 }
 
-/// Copies the viewport's pixels of the prepass into the view's own front layer.
+/// Copies the viewport's pixels of the prepass into the view's own front layer, on an MSAA
+/// camera after drawing the front faces' depth at pixel centres.
 pub(crate) fn front_layer_copy_pass(
+    world: &World,
     view: ViewQuery<(
         &FrontLayerCopy,
         &FrontLayerCopyBindGroup,
         &ViewUniformOffset,
+        &ExtractedCamera,
+        &ExtractedView,
     )>,
     pipeline_cache: Res<PipelineCache>,
+    centre_phases: Res<ViewSortedRenderPhases<CentreSample3d>>,
     mut ctx: RenderContext,
 ) {
-    let (copy, bind_group, view_offset) = view.into_inner();
+    let view_entity = view.entity();
+    let (copy, bind_group, view_offset, camera, extracted_view) = view.into_inner();
     let Some(pipeline) = pipeline_cache.get_render_pipeline(copy.pipeline) else {
         return;
     };
-    fn attachment(texture: &CachedTexture) -> Option<RenderPassColorAttachment<'_>> {
-        Some(RenderPassColorAttachment {
-            view: &texture.default_view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: Operations {
-                load: LoadOp::Clear(Default::default()),
-                store: StoreOp::Store,
-            },
-        })
+    if let Some(centre) = &copy.centre {
+        let phase = centre_phases.get(&extracted_view.retained_view_entity);
+        draw_centre_sample(&mut ctx, world, view_entity, camera, centre, phase);
     }
     let mut color_attachments = vec![attachment(&copy.normal)];
     color_attachments.extend(copy.motion_vectors.as_ref().map(attachment));
@@ -373,5 +425,64 @@ pub(crate) fn front_layer_copy_pass(
     pass.set_render_pipeline(pipeline);
     pass.set_bind_group(0, &bind_group.0, &[view_offset.offset]);
     pass.draw(0..3, 0..1);
+    pass_span.end(&mut pass);
+}
+
+/// A colour attachment cleared to zero.
+fn attachment(texture: &CachedTexture) -> Option<RenderPassColorAttachment<'_>> {
+    Some(RenderPassColorAttachment {
+        view: &texture.default_view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: Operations {
+            load: LoadOp::Clear(Default::default()),
+            store: StoreOp::Store,
+        },
+    })
+}
+
+/// Draws the opaque meshes single-sampled into `target`.
+fn draw_centre_sample(
+    ctx: &mut RenderContext,
+    world: &World,
+    view_entity: Entity,
+    camera: &ExtractedCamera,
+    target: &CentreSample,
+    phase: Option<&SortedRenderPhase<CentreSample3d>>,
+) {
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    // Cleared even when nothing is drawn: an empty texel reads as "no surface".
+    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
+        label: Some("dynamic_ao_centre_sample"),
+        color_attachments: &[
+            attachment(&target.normal),
+            attachment(&target.depth_gradient),
+        ],
+        depth_stencil_attachment: Some(RenderPassDepthStencilAttachment {
+            view: &target.depth.default_view,
+            depth_ops: Some(Operations {
+                load: LoadOp::Clear(0.0),
+                store: StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_centre_sample");
+    if let Some(viewport) = camera.viewport.as_ref() {
+        // The texture has the size of the viewport, so draw from its origin.
+        pass.set_camera_viewport(&Viewport {
+            physical_position: Default::default(),
+            ..viewport.clone()
+        });
+    }
+    if let Some(phase) = phase
+        && let Err(err) = phase.render(&mut pass, world, view_entity)
+    {
+        error!("dynamic AO: error while drawing the MSAA front layer's centre sample: {err:?}");
+    }
     pass_span.end(&mut pass);
 }

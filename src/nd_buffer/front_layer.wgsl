@@ -12,6 +12,13 @@
 #ifdef MOTION_VECTORS
 @group(0) @binding(3) var prepass_motion_vectors: texture_multisampled_2d<f32>;
 #endif
+// The meshes of Bevy's prepass drawn again single-sampled, the size of the viewport: the depth a
+// single-sampled prepass would hold at each pixel's centre, and the vertex normal there, its
+// alpha 0 where the surface is alpha-masked (or absent), which the prepass may have discarded.
+@group(0) @binding(4) var centre_depth: texture_depth_2d;
+@group(0) @binding(5) var centre_normal: texture_2d<f32>;
+// The depth's screen-space gradient there, per pixel: the plane of the triangle at the centre.
+@group(0) @binding(6) var centre_depth_gradient: texture_2d<f32>;
 #else
 @group(0) @binding(1) var prepass_depth: texture_depth_2d;
 @group(0) @binding(2) var prepass_normal: texture_2d<f32>;
@@ -98,20 +105,92 @@ fn one_surface(pixel: vec2<i32>, samples: i32) -> bool {
 }
 #endif
 
+// Relative difference within which two reverse-Z depths lie on one surface.
+const SAME_SURFACE: f32 = 0.01;
+// Cosine within which a prepass normal (normal-mapped) and a vertex normal are of one surface:
+// 37°, more than most normal maps tilt.
+const SAME_NORMAL: f32 = 0.8;
+
 @fragment
 fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     // The prepass has the size of the render target; the viewport starts at `view.viewport.xy`.
     let local = floor(in.position.xy);
     let pixel = vec2<i32>(local + view.viewport.xy);
-    var out: FrontLayer;
 #ifdef MULTISAMPLED
+    let samples = i32(textureNumSamples(prepass_depth));
+    let centre = textureLoad(centre_depth, vec2<i32>(local), 0);
+    let centre_n = textureLoad(centre_normal, vec2<i32>(local), 0);
+    // Of the samples on the centre's surface (depth within `SAME_SURFACE`, normal within
+    // `SAME_NORMAL` of the vertex normal there), the one nearest the plane of the centre's
+    // triangle: on that triangle where any is, whose fragment MSAA shades once, at the pixel's
+    // centre, so its normal (normal-mapped) is what a single-sampled prepass holds there. An
+    // empty centre matches empty samples.
+    let n = decode_normal(centre_n.xyz);
+    let gradient = textureLoad(centre_depth_gradient, vec2<i32>(local), 0).xy;
+    var best = -1;
+    var best_off_plane = 0.0;
+    for (var s = 0; s < samples; s += 1) {
+        let d = textureLoad(prepass_depth, pixel, s);
+        let off_plane = abs(d - centre - dot(gradient, sample_position(s, samples) - 0.5));
+        let facing = dot(decode_normal(textureLoad(prepass_normal, pixel, s).xyz), n);
+        let on_it = abs(d - centre) <= SAME_SURFACE * centre && facing >= SAME_NORMAL;
+        let same = select(on_it, d == 0.0, centre == 0.0);
+        if same && (best < 0 || off_plane < best_off_plane) {
+            best = s;
+            best_off_plane = off_plane;
+        }
+    }
+    if best >= 0 {
+        var out: FrontLayer;
+        out.depth = centre;
+        out.normal = textureLoad(prepass_normal, pixel, best);
+#ifdef MOTION_VECTORS
+        out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, best);
+#endif
+        return out;
+    }
+    // No sample on it: a sliver between the samples, whose depth and vertex normal only the
+    // centre sample has (its motion is taken from the sample nearest in depth). Unless it is
+    // alpha-masked, or empty: then the prepass may not show it.
+    if centre_n.a > 0.5 {
+        var out: FrontLayer;
+        out.depth = centre;
+        out.normal = centre_n;
+#ifdef MOTION_VECTORS
+        var nearest = 0;
+        for (var s = 1; s < samples; s += 1) {
+            let d = textureLoad(prepass_depth, pixel, s);
+            if abs(d - centre) < abs(textureLoad(prepass_depth, pixel, nearest) - centre) {
+                nearest = s;
+            }
+        }
+        out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, nearest);
+#endif
+        return out;
+    }
+    return from_samples(local, pixel, samples);
+#else
+    var out: FrontLayer;
+    out.depth = textureLoad(prepass_depth, pixel, 0);
+    out.normal = textureLoad(prepass_normal, pixel, 0);
+#ifdef MOTION_VECTORS
+    out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, 0);
+#endif
+    return out;
+#endif
+}
+
+#ifdef MULTISAMPLED
+// The front layer at a pixel whose centre sample shows an alpha-masked surface (or none) that no
+// sample lies on, from the samples alone.
+fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer {
+    var out: FrontLayer;
     // Every pass reconstructs a pixel's position at its centre, but no sample lies there (those
     // of 4 samples lie 0.4 px away), and on a floor seen at a grazing angle a depth read that far
     // off tilts the reconstructed surface away from its normal enough to occlude itself. Where
     // the samples lie on one surface their mean is the centre's depth. At silhouettes (two
     // surfaces, whose average would be a point on neither) one sample's surface is carried to
     // the centre along its plane.
-    let samples = i32(textureNumSamples(prepass_depth));
     if one_surface(pixel, samples) {
         var depth = 0.0;
         var normal = vec4<f32>(0.0);
@@ -149,7 +228,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     var behind_depth = 0.0;
     for (var s = 0; s < samples; s += 1) {
         let d = textureLoad(prepass_depth, pixel, s);
-        if nearest_depth - d <= 0.01 * nearest_depth {
+        if nearest_depth - d <= SAME_SURFACE * nearest_depth {
             covered += 1;
         } else if behind < 0 || d > behind_depth {
             behind = s;
@@ -163,7 +242,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     var normal = vec4<f32>(0.0);
     var same = 0.0;
     for (var s = 0; s < samples; s += 1) {
-        if abs(textureLoad(prepass_depth, pixel, s) - nearest_depth) <= 0.01 * nearest_depth {
+        if abs(textureLoad(prepass_depth, pixel, s) - nearest_depth) <= SAME_SURFACE * nearest_depth {
             normal += textureLoad(prepass_normal, pixel, s);
             same += 1.0;
         }
@@ -175,12 +254,5 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, nearest);
 #endif
     return out;
-#else
-    out.depth = textureLoad(prepass_depth, pixel, 0);
-    out.normal = textureLoad(prepass_normal, pixel, 0);
-#ifdef MOTION_VECTORS
-    out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, 0);
-#endif
-    return out;
-#endif
 }
+#endif

@@ -4,7 +4,9 @@
 //! the passes cannot read it as it is (MSAA, split-screen viewports). This module draws the
 //! second layer:
 //! the nearest back faces, through a mesh phase of our own that reuses Bevy's mesh pipeline, so
-//! skinned and morph-target meshes deform exactly as in the front layer. Both layers use the
+//! skinned and morph-target meshes deform exactly as in the front layer. On MSAA cameras a second
+//! phase of the same kind draws the front faces' depth single-sampled, which tells the copy which
+//! of a pixel's samples show the surface at its centre. Both layers use the
 //! same encoding: reverse-Z `Depth32Float` depth and world-space normals stored as `n*0.5+0.5` in
 //! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`. The back layer's
 //! normals are drawn only where the near field reads them; for every other technique the layer
@@ -29,17 +31,20 @@ use bevy::render::{
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoStartup, DynamicAoSystems};
 pub(crate) use front_layer::{FrontLayer, FrontLayerViews};
-pub use phase::BackFace3d;
+pub use phase::{BackFace3d, CentreSample3d, NdLayer3d};
 
 /// Registers the back-face phase, its pipeline and its pass.
 pub struct NdBufferPlugin;
 
 impl Plugin for NdBufferPlugin {
     fn build(&self, app: &mut App) {
-        embedded_asset!(app, "back_faces.wgsl");
+        embedded_asset!(app, "layer_normals.wgsl");
         embedded_asset!(app, "front_layer.wgsl");
-        app.add_plugins(SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(
-            RenderDebugFlags::default(),
+        app.add_plugins((
+            SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(RenderDebugFlags::default()),
+            SortedRenderPhasePlugin::<CentreSample3d, MeshPipeline>::new(
+                RenderDebugFlags::default(),
+            ),
         ));
     }
 
@@ -50,8 +55,10 @@ impl Plugin for NdBufferPlugin {
         render_app
             .init_resource::<SpecializedMeshPipelines<pipeline::BackFacePipeline>>()
             .init_resource::<DrawFunctions<BackFace3d>>()
+            .init_resource::<DrawFunctions<CentreSample3d>>()
             .init_resource::<SpecializedRenderPipelines<front_layer::FrontLayerCopyPipeline>>()
-            .add_render_command::<BackFace3d, phase::DrawBackFaces>()
+            .add_render_command::<BackFace3d, phase::DrawLayerMeshes>()
+            .add_render_command::<CentreSample3d, phase::DrawLayerMeshes>()
             .add_systems(
                 RenderStartup,
                 (
@@ -59,12 +66,19 @@ impl Plugin for NdBufferPlugin {
                     front_layer::init_front_layer_copy_pipeline,
                 ),
             )
-            .add_systems(ExtractSchedule, phase::extract_back_face_phases)
+            .add_systems(
+                ExtractSchedule,
+                (
+                    phase::extract_layer_phases::<true>,
+                    phase::extract_layer_phases::<false>,
+                ),
+            )
             .add_systems(
                 Render,
                 (
-                    pipeline::queue_back_faces.in_set(RenderSystems::QueueMeshes),
+                    pipeline::queue_layers.in_set(RenderSystems::QueueMeshes),
                     sort_phase_system::<BackFace3d>.in_set(RenderSystems::PhaseSort),
+                    sort_phase_system::<CentreSample3d>.in_set(RenderSystems::PhaseSort),
                     front_layer::prepare_front_layer_copies.in_set(RenderSystems::PrepareResources),
                     front_layer::wait_for_front_layer_copy.in_set(DynamicAoPrepare::Readiness),
                     front_layer::prepare_front_layer_copy_bind_groups

@@ -1,4 +1,5 @@
-//! The phase item of the back-face layer.
+//! The phase items of the layers this crate draws with Bevy's mesh pipeline: the back-face layer,
+//! and on MSAA cameras the front layer's depth at pixel centres.
 
 use core::ops::Range;
 
@@ -24,13 +25,14 @@ use indexmap::IndexMap;
 
 use crate::settings::DynamicAo;
 
-/// One mesh drawn into the back-face layer of the ND-buffer.
-pub struct BackFace3d {
+/// One mesh drawn into a layer of the ND-buffer drawn by this crate: the back faces when `BACK`
+/// ([`BackFace3d`]), else the front faces' depth at pixel centres ([`CentreSample3d`]).
+pub struct NdLayer3d<const BACK: bool> {
     /// Distance from the camera, for a front-to-back draw order (metres).
     pub distance: f32,
     /// The mesh entity: render-world and main-world ids.
     pub entity: (Entity, MainEntity),
-    /// The specialized back-face pipeline of this mesh.
+    /// The specialized pipeline of this mesh for this layer.
     pub pipeline: CachedRenderPipelineId,
     /// The draw commands (Bevy's mesh draw).
     pub draw_function: DrawFunctionId,
@@ -42,7 +44,36 @@ pub struct BackFace3d {
     pub indexed: bool,
 }
 
-impl PhaseItem for BackFace3d {
+impl<const BACK: bool> NdLayer3d<BACK> {
+    /// A mesh's item, before Bevy's batching.
+    pub fn new(
+        entity: (Entity, MainEntity),
+        pipeline: CachedRenderPipelineId,
+        draw_function: DrawFunctionId,
+        indexed: bool,
+    ) -> Self {
+        Self {
+            // Render-world mesh instances carry no world-space centre to sort by; the layers
+            // are depth-tested, so order only affects overdraw.
+            distance: 0.0,
+            entity,
+            pipeline,
+            draw_function,
+            batch_range: 0..1,
+            extra_index: PhaseItemExtraIndex::None,
+            indexed,
+        }
+    }
+}
+
+/// One mesh drawn into the back-face layer of the ND-buffer.
+pub type BackFace3d = NdLayer3d<true>;
+
+/// One mesh drawn into the single-sampled depth of an MSAA camera's front layer (see
+/// `front_layer.rs`: it tells which surface a pixel's centre shows).
+pub type CentreSample3d = NdLayer3d<false>;
+
+impl<const BACK: bool> PhaseItem for NdLayer3d<BACK> {
     fn entity(&self) -> Entity {
         self.entity.0
     }
@@ -72,7 +103,7 @@ impl PhaseItem for BackFace3d {
     }
 }
 
-impl SortedPhaseItem for BackFace3d {
+impl<const BACK: bool> SortedPhaseItem for NdLayer3d<BACK> {
     type SortKey = FloatOrd;
 
     fn sort_key(&self) -> Self::SortKey {
@@ -91,14 +122,14 @@ impl SortedPhaseItem for BackFace3d {
     }
 }
 
-impl CachedRenderPipelinePhaseItem for BackFace3d {
+impl<const BACK: bool> CachedRenderPipelinePhaseItem for NdLayer3d<BACK> {
     fn cached_pipeline(&self) -> CachedRenderPipelineId {
         self.pipeline
     }
 }
 
 /// Bevy's own mesh draw commands: group 2 carries each mesh's skin and morph data.
-pub(crate) type DrawBackFaces = (
+pub(crate) type DrawLayerMeshes = (
     SetItemPipeline,
     SetMeshViewBindGroup<0>,
     SetMeshViewBindingArrayBindGroup<1>,
@@ -106,8 +137,10 @@ pub(crate) type DrawBackFaces = (
     DrawMesh,
 );
 
-pub(crate) fn extract_back_face_phases(
-    mut phases: ResMut<ViewSortedRenderPhases<BackFace3d>>,
+/// Gives every active AO camera an empty phase of the layer each frame (meshes are queued into it
+/// where the camera needs the layer) and drops those of cameras gone.
+pub(crate) fn extract_layer_phases<const BACK: bool>(
+    mut phases: ResMut<ViewSortedRenderPhases<NdLayer3d<BACK>>>,
     cameras: Extract<Query<(Entity, &Camera), (With<Camera3d>, With<DynamicAo>)>>,
     mut live: Local<HashSet<RetainedViewEntity>>,
 ) {

@@ -1,33 +1,41 @@
-//! The back-face pipeline (Bevy's mesh pipeline with front-face culling, and our fragment
-//! shader where the layer's normals are drawn) and the system that queues every visible mesh
-//! into the phase.
+//! The pipeline of the layers this crate draws with Bevy's mesh pipeline (the back faces, with
+//! our fragment shader where the layer's normals are drawn; on MSAA cameras the front faces'
+//! depth at pixel centres) and the system that queues every visible mesh into their phases.
 
-use bevy::asset::{AssetId, Handle, load_embedded_asset};
+use core::any::TypeId;
+
+use bevy::asset::{AssetId, Handle, UntypedAssetId, load_embedded_asset};
 use bevy::ecs::prelude::*;
 use bevy::log::{error, warn};
+use bevy::material::RenderPhaseType;
 use bevy::mesh::{Mesh, Mesh3d, MeshVertexBufferLayoutRef, PrimitiveTopology};
 use bevy::pbr::{
-    MeshPipeline, MeshPipelineKey, RenderMaterialInstances, RenderMeshInstanceFlags,
-    RenderMeshInstances, ViewKeyCache,
+    MeshPipeline, MeshPipelineKey, PreparedMaterial, RenderMaterialInstances,
+    RenderMeshInstanceFlags, RenderMeshInstances, StandardMaterial, StandardMaterialKey,
+    ViewKeyCache,
 };
 use bevy::platform::collections::HashSet;
 use bevy::render::{
+    erased_render_asset::ErasedRenderAssets,
     mesh::RenderMesh,
     render_asset::RenderAssets,
-    render_phase::{DrawFunctions, PhaseItemExtraIndex, ViewSortedRenderPhases},
+    render_phase::{DrawFunctions, ViewSortedRenderPhases},
     render_resource::{
         ColorTargetState, ColorWrites, CompareFunction, Face, MultisampleState, PipelineCache,
         RenderPipelineDescriptor, SpecializedMeshPipeline, SpecializedMeshPipelineError,
         SpecializedMeshPipelines,
     },
-    view::{ExtractedView, RenderVisibleEntities},
+    view::{ExtractedView, Msaa, RenderVisibleEntities},
 };
 use bevy::shader::Shader;
 
-use super::phase::{BackFace3d, DrawBackFaces};
+use super::front_layer::DEPTH_GRADIENT_FORMAT;
+use super::phase::{BackFace3d, CentreSample3d, DrawLayerMeshes, NdLayer3d};
+use crate::settings::AoTechnique;
 use crate::view::{DEPTH_FORMAT, DynamicAoView, NORMAL_FORMAT};
 
-/// Bevy's mesh pipeline, drawing back faces into the second ND-buffer layer.
+/// Bevy's mesh pipeline, drawing back faces into the second ND-buffer layer and, on MSAA cameras,
+/// the front faces' single-sampled depth.
 #[derive(Resource)]
 pub(crate) struct BackFacePipeline {
     mesh_pipeline: MeshPipeline,
@@ -41,24 +49,71 @@ pub(crate) fn init_back_face_pipeline(
 ) {
     commands.insert_resource(BackFacePipeline {
         mesh_pipeline: mesh_pipeline.clone(),
-        shader: load_embedded_asset!(asset_server.as_ref(), "back_faces.wgsl"),
+        shader: load_embedded_asset!(asset_server.as_ref(), "layer_normals.wgsl"),
     });
 }
 
-/// What a back-face pipeline is specialized on: Bevy's mesh key, and whether it draws the
-/// layer's normals.
+/// What a layer pipeline is specialized on: Bevy's mesh key, and what it draws.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
-pub(crate) struct BackFaceKey {
+pub(crate) struct LayerKey {
     pub mesh: MeshPipelineKey,
-    /// Only the near field reads the layer's normals; every other reader wants its depth, which
-    /// a pipeline without a fragment stage draws: on lavapipe the pass took 3.5–4.1 ms with
-    /// normals and 1.7–2.5 ms without, in alternating runs of the `gpu_passes` benchmark's scene
-    /// at 640×480.
-    pub normals: bool,
+    pub draw: LayerDraw,
+}
+
+/// What a layer pipeline draws.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(crate) enum LayerDraw {
+    /// The back faces' depth, without a fragment stage: every reader of the back layer but the
+    /// near field wants only its depth, and on lavapipe the pass took 3.5–4.1 ms with normals
+    /// and 1.7–2.5 ms without, in alternating runs of the `gpu_passes` benchmark's scene at
+    /// 640×480.
+    BackDepth,
+    /// The back faces' depth and normals, for the near field.
+    BackNormals,
+    /// The depth and normals at pixel centres of the meshes Bevy's prepass draws (MSAA cameras),
+    /// culled as their material culls them there. `masked`: an alpha-masked material, whose
+    /// discarded fragments only its shader knows, so that this draw may show it where the
+    /// prepass does not (marked in the normal's alpha).
+    Centre { cull: CentreCull, masked: bool },
+}
+
+/// Which faces the centre sample culls: those Bevy's prepass culls for the mesh's material.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(crate) enum CentreCull {
+    /// Back faces (front faces where culling is inverted): the mesh pipeline's choice, and every
+    /// material's but a `StandardMaterial` that says otherwise.
+    Back,
+    /// Front faces (back faces where culling is inverted).
+    Front,
+    /// None: a double-sided `StandardMaterial`.
+    None,
+}
+
+impl CentreCull {
+    /// The cull mode of the material `asset` of a mesh: a `StandardMaterial`'s own, else the
+    /// mesh pipeline's.
+    fn of(asset: UntypedAssetId, material: &PreparedMaterial) -> Self {
+        if asset.type_id() != TypeId::of::<StandardMaterial>() {
+            return Self::Back;
+        }
+        // A `StandardMaterial`'s key is its bind group data (`StandardMaterial::specialize`).
+        let key = material
+            .properties
+            .material_key
+            .to_key::<StandardMaterialKey>();
+        match (
+            key.contains(StandardMaterialKey::CULL_FRONT),
+            key.contains(StandardMaterialKey::CULL_BACK),
+        ) {
+            (true, false) => Self::Front,
+            (false, true) => Self::Back,
+            _ => Self::None,
+        }
+    }
 }
 
 impl SpecializedMeshPipeline for BackFacePipeline {
-    type Key = BackFaceKey;
+    type Key = LayerKey;
 
     fn specialize(
         &self,
@@ -68,32 +123,55 @@ impl SpecializedMeshPipeline for BackFacePipeline {
         // Starting from Bevy's own descriptor keeps the vertex stage identical to the front
         // layer's: same skinning, morph targets, instance data and bind group layouts.
         let mut descriptor = self.mesh_pipeline.specialize(key.mesh, layout)?;
-        descriptor.label = Some("dynamic_ao_back_face_pipeline".into());
-        if key.normals {
+        descriptor.label = Some(match key.draw {
+            LayerDraw::Centre { .. } => "dynamic_ao_centre_sample_pipeline".into(),
+            _ => "dynamic_ao_back_face_pipeline".into(),
+        });
+        if key.draw != LayerDraw::BackDepth {
             let fragment = descriptor
                 .fragment
                 .as_mut()
                 .expect("the mesh pipeline always has a fragment stage");
             fragment.shader = self.shader.clone();
             fragment.entry_point = Some("fragment".into());
-            fragment.targets = vec![Some(ColorTargetState {
-                format: NORMAL_FORMAT,
-                blend: None,
-                write_mask: ColorWrites::ALL,
-            })];
+            let target = |format| {
+                Some(ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: ColorWrites::ALL,
+                })
+            };
+            fragment.targets = vec![target(NORMAL_FORMAT)];
+            if let LayerDraw::Centre { masked, .. } = key.draw {
+                fragment.shader_defs.push("FRONT_FACES".into());
+                if masked {
+                    fragment.shader_defs.push("ALPHA_MASKED".into());
+                }
+                fragment.targets.push(target(DEPTH_GRADIENT_FORMAT));
+            }
         } else {
             descriptor.fragment = None;
         }
-        let key = key.mesh;
-        descriptor.primitive.cull_mode = Some(if key.contains(MeshPipelineKey::INVERT_CULLING) {
-            Face::Back
-        } else {
-            Face::Front
+        let cull_front = match key.draw {
+            LayerDraw::BackDepth | LayerDraw::BackNormals => Some(true),
+            LayerDraw::Centre { cull, .. } => match cull {
+                CentreCull::Back => Some(false),
+                CentreCull::Front => Some(true),
+                CentreCull::None => None,
+            },
+        };
+        let inverted = key.mesh.contains(MeshPipelineKey::INVERT_CULLING);
+        descriptor.primitive.cull_mode = cull_front.map(|front| {
+            if front != inverted {
+                Face::Front
+            } else {
+                Face::Back
+            }
         });
         if let Some(depth) = descriptor.depth_stencil.as_mut() {
             depth.format = DEPTH_FORMAT;
             depth.depth_write_enabled = Some(true);
-            // Reverse-Z: the nearest back face wins.
+            // Reverse-Z: the nearest face wins.
             depth.depth_compare = Some(CompareFunction::GreaterEqual);
         }
         // Our layer is single-sampled whatever the camera uses.
@@ -102,8 +180,11 @@ impl SpecializedMeshPipeline for BackFacePipeline {
     }
 }
 
-pub(crate) fn queue_back_faces(
+/// Queues every visible mesh with a material into the back-face phase of each view that reads
+/// the back layer, and into the centre-depth phase of each MSAA view.
+pub(crate) fn queue_layers(
     draw_functions: Res<DrawFunctions<BackFace3d>>,
+    centre_draw_functions: Res<DrawFunctions<CentreSample3d>>,
     mut pipelines: ResMut<SpecializedMeshPipelines<BackFacePipeline>>,
     pipeline_cache: Res<PipelineCache>,
     back_face_pipeline: Res<BackFacePipeline>,
@@ -111,17 +192,36 @@ pub(crate) fn queue_back_faces(
     render_mesh_instances: Res<RenderMeshInstances>,
     view_key_cache: Res<ViewKeyCache>,
     mut phases: ResMut<ViewSortedRenderPhases<BackFace3d>>,
-    views: Query<(&ExtractedView, &RenderVisibleEntities, &DynamicAoView)>,
+    mut centre_phases: ResMut<ViewSortedRenderPhases<CentreSample3d>>,
+    views: Query<(
+        &ExtractedView,
+        &RenderVisibleEntities,
+        &DynamicAoView,
+        &Msaa,
+    )>,
     materials: Res<RenderMaterialInstances>,
+    prepared_materials: Res<ErasedRenderAssets<PreparedMaterial>>,
     mut warned: Local<HashSet<AssetId<Mesh>>>,
 ) {
-    let draw_function = draw_functions.read().id::<DrawBackFaces>();
-    for (view, visible_entities, ao_view) in &views {
-        let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
+    let draw_function = draw_functions.read().id::<DrawLayerMeshes>();
+    let centre_draw_function = centre_draw_functions.read().id::<DrawLayerMeshes>();
+    for (view, visible_entities, ao_view, msaa) in &views {
+        let (Some(phase), Some(centre_phase)) = (
+            phases.get_mut(&view.retained_view_entity),
+            centre_phases.get_mut(&view.retained_view_entity),
+        ) else {
             continue;
         };
         phase.clear();
-        if !ao_view.back_layer {
+        centre_phase.clear();
+        let back = ao_view.back_layer.then_some(if ao_view.back_normals {
+            LayerDraw::BackNormals
+        } else {
+            LayerDraw::BackDepth
+        });
+        // Under Bevy's own SSAO none of our passes reads the front layer.
+        let centre = msaa.samples() > 1 && ao_view.technique() != AoTechnique::BevySsao;
+        if back.is_none() && !centre {
             continue;
         }
         let Some(view_key) = view_key_cache.get(&view.retained_view_entity) else {
@@ -131,8 +231,8 @@ pub(crate) fn queue_back_faces(
             continue;
         };
         for (render_entity, main_entity) in visible.iter_visible() {
-            // Bevy's prepass, the front layer, draws only meshes with a material; so does the
-            // back layer.
+            // Bevy's prepass, the front layer, draws only meshes with a material; so do our
+            // layers.
             if !materials.instances.contains_key(main_entity) {
                 continue;
             }
@@ -149,7 +249,7 @@ pub(crate) fn queue_back_faces(
             ) {
                 continue;
             }
-            if ao_view.back_normals
+            if back == Some(LayerDraw::BackNormals)
                 && !mesh.layout.0.contains(Mesh::ATTRIBUTE_NORMAL)
                 && warned.insert(mesh_id)
             {
@@ -178,34 +278,57 @@ pub(crate) fn queue_back_faces(
             if instance.lightmap_slab_index().is_some() {
                 key |= MeshPipelineKey::LIGHTMAPPED;
             }
-            let key = BackFaceKey {
-                mesh: key,
-                normals: ao_view.back_normals,
-            };
-            let pipeline =
+            let mut specialize = |draw| {
+                let key = LayerKey { mesh: key, draw };
                 match pipelines.specialize(&pipeline_cache, &back_face_pipeline, key, &mesh.layout)
                 {
-                    Ok(id) => id,
+                    Ok(id) => Some(id),
                     Err(err) => {
                         if warned.insert(mesh_id) {
-                            error!(
-                                "dynamic AO cannot draw the back faces of mesh {mesh_id}: {err}"
-                            );
+                            error!("dynamic AO cannot draw mesh {mesh_id} into its layers: {err}");
                         }
-                        continue;
+                        None
                     }
+                }
+            };
+            let entity = (*render_entity, *main_entity);
+            // The centre sample stands for Bevy's prepass, which draws opaque and alpha-masked
+            // materials (blended and transmissive ones are in neither).
+            let centre_draw = || {
+                let instance = materials.instances.get(main_entity)?;
+                let material = prepared_materials.get(instance.asset_id)?;
+                let masked = match material.properties.render_phase_type {
+                    RenderPhaseType::Opaque => false,
+                    RenderPhaseType::AlphaMask => true,
+                    RenderPhaseType::Transmissive | RenderPhaseType::Transparent => return None,
                 };
-            phase.add_retained(BackFace3d {
-                // Render-world mesh instances carry no world-space centre to sort by; the
-                // layer is depth-tested, so order only affects overdraw.
-                distance: 0.0,
-                entity: (*render_entity, *main_entity),
-                pipeline,
-                draw_function,
-                batch_range: 0..1,
-                extra_index: PhaseItemExtraIndex::None,
-                indexed: mesh.indexed(),
-            });
+                material
+                    .properties
+                    .prepass_enabled
+                    .then(|| LayerDraw::Centre {
+                        cull: CentreCull::of(instance.asset_id, material),
+                        masked,
+                    })
+            };
+            if let Some(pipeline) = back.and_then(&mut specialize) {
+                phase.add_retained(NdLayer3d::new(
+                    entity,
+                    pipeline,
+                    draw_function,
+                    mesh.indexed(),
+                ));
+            }
+            if centre
+                && let Some(draw) = centre_draw()
+                && let Some(pipeline) = specialize(draw)
+            {
+                centre_phase.add_retained(NdLayer3d::new(
+                    entity,
+                    pipeline,
+                    centre_draw_function,
+                    mesh.indexed(),
+                ));
+            }
         }
     }
 }

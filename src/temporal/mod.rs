@@ -36,6 +36,7 @@
 
 mod node;
 mod pipeline;
+mod sequence;
 pub mod settings;
 mod view;
 
@@ -74,6 +75,8 @@ impl Plugin for TemporalPlugin {
                 Render,
                 (
                     view::prepare_history.in_set(RenderSystems::PrepareResources),
+                    // Before the uniform goes to the GPU (in `PrepareResources`).
+                    sequence::advance_sequences.in_set(RenderSystems::PrepareViews),
                     node::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_temporal_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                 ),

@@ -125,7 +125,7 @@ fn history_textures(device: &RenderDevice, size: UVec2) -> [(Texture, TextureVie
 }
 
 /// The settings that do not make the history stale when they change.
-fn history_key(settings: &DynamicAo) -> DynamicAo {
+pub(super) fn history_key(settings: &DynamicAo) -> DynamicAo {
     let mut key = settings.clone();
     key.debug_view = false;
     key.temporal.reset = false;

@@ -2,7 +2,6 @@
 //! [`DynamicAoView`](super::DynamicAoView) and the uniform every pass reads.
 
 use bevy::camera::{Camera, Camera3d, visibility::RenderLayers};
-use bevy::diagnostic::FrameCount;
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
@@ -65,8 +64,9 @@ pub(crate) struct DynamicAoUniform {
     /// 1 when the back-face layer is drawn: the ND-buffer holds the first solid interval of each
     /// pixel, front layer to back layer, not only the front surface.
     pub seen_back_layer: u32,
-    /// The frame's place in the sample pattern's sequence (see [`crate::AoTemporal`]): the frame
-    /// count under temporal accumulation, 0 without.
+    /// The frame's place in the sample pattern's sequence (see [`crate::AoTemporal`]): under
+    /// temporal accumulation the frames since the view's history began (counted by the temporal
+    /// module, which starts it over with the history), 0 without.
     pub frame_index: u32,
     /// Frames the temporal history averages, 1 without accumulation: the near field sizes its
     /// sample spheres for the whole accumulated budget.
@@ -111,7 +111,6 @@ pub(super) fn extract_views(
     // lose its view state here, or our passes would go on with its last settings.
     without: Extract<Query<RenderEntity, (With<Camera3d>, Without<DynamicAo>)>>,
     present: Res<FarTermsPresent>,
-    frame_count: Extract<Res<FrameCount>>,
 ) {
     for entity in &without {
         commands.entity(entity).remove::<ViewState>();
@@ -202,11 +201,7 @@ pub(super) fn extract_views(
                 radius,
                 near_field_radius: if count_once { near_radius } else { 0.0 },
                 seen_back_layer: u32::from(back_layer),
-                frame_index: if temporal || voxel_temporal {
-                    frame_count.0
-                } else {
-                    0
-                },
+                frame_index: u32::from(temporal || voxel_temporal),
                 temporal_frames: if temporal {
                     ao.temporal.frames() as f32
                 } else {
