@@ -26,14 +26,12 @@
 //! `front_layer.wgsl` says why a sample's own depth is not enough.
 
 use bevy::asset::{Handle, load_embedded_asset};
-use bevy::camera::Viewport;
 use bevy::core_pipeline::FullscreenShader;
 use bevy::core_pipeline::prepass::{
     MOTION_VECTOR_PREPASS_FORMAT, MotionVectorPrepass, ViewPrepassTextures,
 };
 use bevy::ecs::prelude::*;
 use bevy::ecs::query::QueryData;
-use bevy::log::error;
 use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
@@ -52,6 +50,7 @@ use bevy::render::{
 use bevy::shader::Shader;
 use bevy::utils::default;
 
+use super::node::{LayerTargets, cleared, draw_layer};
 use super::phase::CentreSample3d;
 use crate::view::{
     DEPTH_FORMAT, DynamicAoView, NORMAL_FORMAT, PendingPasses, view_size, view_texture,
@@ -402,8 +401,12 @@ pub(crate) fn front_layer_copy_pass(
         let phase = centre_phases.get(&extracted_view.retained_view_entity);
         draw_centre_sample(&mut ctx, world, view_entity, camera, centre, phase);
     }
-    let mut color_attachments = vec![attachment(&copy.normal)];
-    color_attachments.extend(copy.motion_vectors.as_ref().map(attachment));
+    let mut color_attachments = vec![cleared(&copy.normal.default_view)];
+    color_attachments.extend(
+        copy.motion_vectors
+            .as_ref()
+            .map(|texture| cleared(&texture.default_view)),
+    );
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
@@ -428,20 +431,7 @@ pub(crate) fn front_layer_copy_pass(
     pass_span.end(&mut pass);
 }
 
-/// A colour attachment cleared to zero.
-fn attachment(texture: &CachedTexture) -> Option<RenderPassColorAttachment<'_>> {
-    Some(RenderPassColorAttachment {
-        view: &texture.default_view,
-        depth_slice: None,
-        resolve_target: None,
-        ops: Operations {
-            load: LoadOp::Clear(Default::default()),
-            store: StoreOp::Store,
-        },
-    })
-}
-
-/// Draws the opaque meshes single-sampled into `target`.
+/// Draws the meshes of Bevy's prepass single-sampled into `target`.
 fn draw_centre_sample(
     ctx: &mut RenderContext,
     world: &World,
@@ -450,39 +440,19 @@ fn draw_centre_sample(
     target: &CentreSample,
     phase: Option<&SortedRenderPhase<CentreSample3d>>,
 ) {
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-    // Cleared even when nothing is drawn: an empty texel reads as "no surface".
-    let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-        label: Some("dynamic_ao_centre_sample"),
-        color_attachments: &[
-            attachment(&target.normal),
-            attachment(&target.depth_gradient),
-        ],
-        depth_stencil_attachment: Some(RenderPassDepthStencilAttachment {
-            view: &target.depth.default_view,
-            depth_ops: Some(Operations {
-                load: LoadOp::Clear(0.0),
-                store: StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_centre_sample");
-    if let Some(viewport) = camera.viewport.as_ref() {
-        // The texture has the size of the viewport, so draw from its origin.
-        pass.set_camera_viewport(&Viewport {
-            physical_position: Default::default(),
-            ..viewport.clone()
-        });
-    }
-    if let Some(phase) = phase
-        && let Err(err) = phase.render(&mut pass, world, view_entity)
-    {
-        error!("dynamic AO: error while drawing the MSAA front layer's centre sample: {err:?}");
-    }
-    pass_span.end(&mut pass);
+    draw_layer(
+        ctx,
+        world,
+        view_entity,
+        camera,
+        LayerTargets {
+            label: "dynamic_ao_centre_sample",
+            colors: &[
+                cleared(&target.normal.default_view),
+                cleared(&target.depth_gradient.default_view),
+            ],
+            depth: &target.depth.default_view,
+        },
+        phase,
+    );
 }

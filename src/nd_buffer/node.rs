@@ -1,4 +1,5 @@
-//! The pass that draws the back-face layer.
+//! The passes that draw the layers of Bevy's mesh pipeline: the back-face layer, and (called by
+//! the front-layer copy) the centre sample of MSAA cameras.
 
 use bevy::camera::Viewport;
 use bevy::ecs::prelude::*;
@@ -6,16 +7,16 @@ use bevy::log::error;
 use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
-    render_phase::ViewSortedRenderPhases,
+    render_phase::{SortedRenderPhase, ViewSortedRenderPhases},
     render_resource::{
         LoadOp, Operations, RenderPassColorAttachment, RenderPassDepthStencilAttachment,
-        RenderPassDescriptor, StoreOp,
+        RenderPassDescriptor, StoreOp, TextureView,
     },
     renderer::{RenderContext, ViewQuery},
     view::ExtractedView,
 };
 
-use super::phase::BackFace3d;
+use super::phase::{BackFace3d, NdLayer3d};
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoTextures, DynamicAoView};
 
@@ -36,30 +37,61 @@ pub(crate) fn back_face_pass(
     if ao_view.technique() == AoTechnique::BevySsao {
         return;
     }
+    // Its normals are a target only where the near field reads them (see `LayerDraw`).
+    let normals = ao_view
+        .back_normals
+        .then(|| cleared(&textures.back_normal.default_view));
+    draw_layer(
+        &mut ctx,
+        world,
+        view_entity,
+        camera,
+        LayerTargets {
+            label: "dynamic_ao_back_faces",
+            colors: normals.as_slice(),
+            depth: &textures.back_depth.default_view,
+        },
+        phases.get(&extracted_view.retained_view_entity),
+    );
+}
 
-    let diagnostics = ctx.diagnostic_recorder();
-    let diagnostics = diagnostics.as_deref();
-
-    // The layer is cleared even when nothing is drawn: an empty layer reads as "no surface".
-    // Its normals are a target only where the near field reads them (see `BackFaceKey`).
-    let normals = ao_view.back_normals.then(|| RenderPassColorAttachment {
-        view: &textures.back_normal.default_view,
+/// A colour attachment cleared to zero.
+pub(super) fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {
+    Some(RenderPassColorAttachment {
+        view,
         depth_slice: None,
         resolve_target: None,
         ops: Operations {
             load: LoadOp::Clear(Default::default()),
             store: StoreOp::Store,
         },
-    });
+    })
+}
+
+/// Where a layer is drawn: the pass's label (also its time span's), colour targets and depth.
+pub(super) struct LayerTargets<'a> {
+    pub label: &'static str,
+    pub colors: &'a [Option<RenderPassColorAttachment<'a>>],
+    pub depth: &'a TextureView,
+}
+
+/// Draws `phase` into `targets`, the size of the camera's viewport. The targets are cleared even
+/// when nothing is drawn: an empty texel reads as "no surface".
+pub(super) fn draw_layer<const BACK: bool>(
+    ctx: &mut RenderContext,
+    world: &World,
+    view_entity: Entity,
+    camera: &ExtractedCamera,
+    targets: LayerTargets,
+    phase: Option<&SortedRenderPhase<NdLayer3d<BACK>>>,
+) {
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
     let mut pass = ctx.begin_tracked_render_pass(RenderPassDescriptor {
-        label: Some("dynamic_ao_back_faces"),
-        color_attachments: if normals.is_some() {
-            std::slice::from_ref(&normals)
-        } else {
-            &[]
-        },
+        label: Some(targets.label),
+        color_attachments: targets.colors,
         depth_stencil_attachment: Some(RenderPassDepthStencilAttachment {
-            view: &textures.back_depth.default_view,
+            view: targets.depth,
             depth_ops: Some(Operations {
                 load: LoadOp::Clear(0.0),
                 store: StoreOp::Store,
@@ -70,19 +102,18 @@ pub(crate) fn back_face_pass(
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    let pass_span = diagnostics.pass_span(&mut pass, "dynamic_ao_back_faces");
+    let pass_span = diagnostics.pass_span(&mut pass, targets.label);
     if let Some(viewport) = camera.viewport.as_ref() {
-        // Our layer has the size of the viewport, so draw from its origin.
-        let viewport = Viewport {
+        // Our layers have the size of the viewport, so draw from its origin.
+        pass.set_camera_viewport(&Viewport {
             physical_position: Default::default(),
             ..viewport.clone()
-        };
-        pass.set_camera_viewport(&viewport);
+        });
     }
-    if let Some(phase) = phases.get(&extracted_view.retained_view_entity)
+    if let Some(phase) = phase
         && let Err(err) = phase.render(&mut pass, world, view_entity)
     {
-        error!("dynamic AO: error while drawing the back-face layer: {err:?}");
+        error!("dynamic AO: error while drawing {}: {err:?}", targets.label);
     }
     pass_span.end(&mut pass);
 }
