@@ -47,7 +47,7 @@ use bevy::render::{
     texture::{CachedTexture, TextureCache},
     view::{ExtractedView, Msaa, ViewUniform, ViewUniformOffset, ViewUniforms},
 };
-use bevy::shader::Shader;
+use bevy::shader::{Shader, ShaderDefVal};
 use bevy::utils::default;
 
 use super::node::{LayerTargets, cleared, draw_layer};
@@ -145,8 +145,9 @@ struct CentreSample {
 /// What the copy pass reads.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub(crate) struct CopyKey {
-    /// The prepass is multisampled.
-    multisampled: bool,
+    /// Samples per pixel of the prepass: 1, or the MSAA sample count. A constant of the shader,
+    /// so that its loops over the samples unroll and index the sample positions statically.
+    samples: u32,
     /// The camera has a motion-vector prepass.
     motion_vectors: bool,
 }
@@ -169,7 +170,7 @@ pub(crate) fn init_front_layer_copy_pipeline(
 }
 
 fn layout(key: CopyKey) -> BindGroupLayoutDescriptor {
-    let (depth, float) = if key.multisampled {
+    let (depth, float) = if key.samples > 1 {
         (
             texture_depth_2d_multisampled(),
             texture_2d_multisampled(TextureSampleType::Float { filterable: false }),
@@ -188,7 +189,7 @@ fn layout(key: CopyKey) -> BindGroupLayoutDescriptor {
     if key.motion_vectors {
         entries.push(float.build(3, ShaderStages::FRAGMENT));
     }
-    if key.multisampled {
+    if key.samples > 1 {
         entries.push(texture_depth_2d().build(4, ShaderStages::FRAGMENT));
         let float = texture_2d(TextureSampleType::Float { filterable: false });
         entries.push(float.build(5, ShaderStages::FRAGMENT));
@@ -210,8 +211,9 @@ impl SpecializedRenderPipeline for FrontLayerCopyPipeline {
             })
         };
         let mut targets = vec![target(NORMAL_FORMAT)];
-        if key.multisampled {
+        if key.samples > 1 {
             shader_defs.push("MULTISAMPLED".into());
+            shader_defs.push(ShaderDefVal::UInt("SAMPLES".into(), key.samples));
         }
         if key.motion_vectors {
             shader_defs.push("MOTION_VECTORS".into());
@@ -266,7 +268,7 @@ pub(crate) fn prepare_front_layer_copies(
             continue;
         };
         let key = CopyKey {
-            multisampled: msaa.samples() > 1,
+            samples: msaa.samples(),
             motion_vectors,
         };
         let usage = TextureUsages::RENDER_ATTACHMENT | TextureUsages::TEXTURE_BINDING;
@@ -289,7 +291,7 @@ pub(crate) fn prepare_front_layer_copies(
                     MOTION_VECTOR_PREPASS_FORMAT,
                 )
             }),
-            centre: key.multisampled.then(|| CentreSample {
+            centre: (key.samples > 1).then(|| CentreSample {
                 depth: texture("dynamic_ao_centre_depth", DEPTH_FORMAT),
                 normal: texture("dynamic_ao_centre_normal", NORMAL_FORMAT),
                 depth_gradient: texture("dynamic_ao_centre_depth_gradient", DEPTH_GRADIENT_FORMAT),

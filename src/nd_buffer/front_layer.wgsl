@@ -36,6 +36,10 @@ struct FrontLayer {
 }
 
 #ifdef MULTISAMPLED
+// Samples per pixel: a constant, so that the loops over the samples unroll and index the
+// sample positions statically (twice as fast on lavapipe as a count read from the texture).
+const SAMPLES: i32 = #{SAMPLES};
+
 // Where sample `s` of `samples` lies in its pixel: the standard positions, which WebGPU requires
 // for 4 samples and Vulkan's standard sample locations give for 2 and 8.
 fn sample_position(s: i32, samples: i32) -> vec2<f32> {
@@ -117,7 +121,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     let local = floor(in.position.xy);
     let pixel = vec2<i32>(local + view.viewport.xy);
 #ifdef MULTISAMPLED
-    let samples = i32(textureNumSamples(prepass_depth));
+    let samples = SAMPLES;
     let centre = textureLoad(centre_depth, vec2<i32>(local), 0);
     let centre_n = textureLoad(centre_normal, vec2<i32>(local), 0);
     // Of the samples on the centre's surface (depth within `SAME_SURFACE`, normal within
