@@ -3,9 +3,11 @@
 //!
 //! From each pixel, `directions × elevations` rays leave over the hemisphere around the
 //! normal, stratified so that they follow the cosine weighting of the AO integral; each is
-//! marched in `steps` equal steps over the radius R, starting one pixel's width above the surface
-//! (a surface seen at a grazing angle changes depth within a pixel by as much as a point half a
-//! pixel's width above it is nearer, so lower steps would read as hidden). A step is blocked
+//! marched in `steps` equal steps over the radius R, starting above the surface by a pixel's width
+//! times the sine of the angle between the normal and the direction to the eye (a surface seen at
+//! a grazing angle changes depth within a pixel by as much as a point half a pixel's width above
+//! it is nearer, so lower steps would read as hidden; one facing the camera does not, and rays
+//! start inside grooves a pixel wide). A step is blocked
 //! where it lies behind the front layer and in front of the back-face layer at the pixel it
 //! projects to (inside a solid), or, where no back face was drawn there, less than R behind the
 //! front layer. The occlusion is the fraction of blocked rays: what a ray tracer measures, for

@@ -75,6 +75,21 @@ fn blocked(
     return select(0, 1, front_z - z < radius);
 }
 
+// How far above the surface at view-space `p` with normal `n` rays start, metres, where a pixel
+// there is `footprint` wide. Across half a pixel a surface whose normal makes the angle θ with the
+// direction to the eye changes depth along the view ray by (footprint / 2) tan θ, and a point at
+// height h above it lies h / cos θ nearer: a step lower than (footprint / 2) sin θ can read as
+// behind the depth at the centre of the pixel it projects to (a floor far off, seen at a grazing
+// angle, would occlude itself). Rays start at twice that. On a surface facing the camera that is
+// almost on it, so they start inside grooves a pixel wide (a model's panel lines) instead of a
+// whole pixel above them.
+fn start_height(p: vec3<f32>, n: vec3<f32>, footprint: f32) -> f32 {
+    let orthographic = view.clip_from_view[3][3] == 1.0;
+    let to_eye = select(normalize(-p), vec3<f32>(0.0, 0.0, 1.0), orthographic);
+    let cos_view = min(abs(dot(n, to_eye)), 1.0);
+    return footprint * sqrt(1.0 - cos_view * cos_view);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let r = receiver(invocation);
@@ -98,11 +113,7 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // steps per frame add up to a fine march.
     let step_offset = frame_jitter(pattern.hash, settings.frame_index);
     let rows = depth_rows();
-    // Rays start one pixel's width above the surface. A surface seen at a grazing angle (a floor
-    // far off) changes depth within a pixel by as much as a point half a pixel's width above it
-    // is nearer, so a step lower than that reads as behind the pixel centre's depth.
-    let footprint = pixel_world_size(view, -p.z, size.y);
-    let origin = p + n * footprint;
+    let origin = p + n * start_height(p, n, pixel_world_size(view, -p.z, size.y));
     let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
     let step = radius / f32(settings.ray_march_steps);
     let directions = settings.ray_march_directions;

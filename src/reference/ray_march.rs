@@ -84,6 +84,21 @@ pub fn ray_march_occlusion(
         .collect()
 }
 
+/// How far above the surface at view-space `p` with normal `n` rays start, metres, where a pixel
+/// is `footprint` wide: `start_height` in `ray_march.wgsl`, which says why. Twice the least
+/// height at which a step cannot read as behind the depth at the centre of the pixel it projects
+/// to, (footprint / 2) sin θ, θ between the normal and the direction to the eye.
+fn start_height(view: &ViewMatrices, p: Vec3, n: Vec3, footprint: f32) -> f32 {
+    let orthographic = view.clip_from_view.w_axis.w == 1.0;
+    let to_eye = if orthographic {
+        Vec3::Z
+    } else {
+        -p.normalize()
+    };
+    let cos_view = n.dot(to_eye).abs().min(1.0);
+    footprint * (1.0 - cos_view * cos_view).sqrt()
+}
+
 /// Occlusion of one pixel.
 pub fn pixel_occlusion(
     nd: &NdBuffer,
@@ -104,9 +119,7 @@ pub fn pixel_occlusion(
         .normalize();
     let frame = tangent_frame(n);
     let (t1, t2) = (frame.x_axis, frame.y_axis);
-    // One pixel's width above the surface, as the shader starts its rays.
-    let footprint = view.pixel_world_size(-p.z, nd.height);
-    let origin = p + n * footprint;
+    let origin = p + n * start_height(view, p, n, view.pixel_world_size(-p.z, nd.height));
     let step = inputs.radius / inputs.steps as f32;
     let hash = pcg_hash(x as u32 ^ pcg_hash(y as u32 ^ 0x2c1b_3c6d));
     let rotation = hash as f32 * HASH_TO_UNIT;
