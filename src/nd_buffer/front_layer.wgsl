@@ -40,17 +40,17 @@ struct FrontLayer {
 // sample positions statically (twice as fast on lavapipe as a count read from the texture).
 const SAMPLES: i32 = #{SAMPLES};
 
-// Where sample `s` of `samples` lies in its pixel: the standard positions, which WebGPU requires
+// Where sample `s` lies in its pixel: the standard positions, which WebGPU requires
 // for 4 samples and Vulkan's standard sample locations give for 2 and 8.
-fn sample_position(s: i32, samples: i32) -> vec2<f32> {
-    if samples == 2 {
+fn sample_position(s: i32) -> vec2<f32> {
+    if SAMPLES == 2 {
         return select(vec2(0.25), vec2(0.75), s == 0);
     }
-    if samples == 4 {
+    if SAMPLES == 4 {
         let positions = array(vec2(0.375, 0.125), vec2(0.875, 0.375), vec2(0.125, 0.625), vec2(0.625, 0.875));
         return positions[s];
     }
-    if samples == 8 {
+    if SAMPLES == 8 {
         let positions = array(
             vec2(0.5625, 0.3125), vec2(0.4375, 0.6875), vec2(0.8125, 0.5625), vec2(0.3125, 0.1875),
             vec2(0.1875, 0.8125), vec2(0.0625, 0.4375), vec2(0.6875, 0.9375), vec2(0.9375, 0.0625),
@@ -69,9 +69,9 @@ fn unproject(local: vec2<f32>, depth: f32) -> vec3<f32> {
 // The depth at the centre of the pixel at `local` of the surface that sample `s` shows: where
 // the ray through the centre meets the plane through the sample's point along its normal `n`.
 // The sample's own depth where that ray runs along the plane.
-fn depth_at_centre(local: vec2<f32>, s: i32, samples: i32, depth: f32, n: vec3<f32>) -> f32 {
+fn depth_at_centre(local: vec2<f32>, s: i32, depth: f32, n: vec3<f32>) -> f32 {
     let centre = local + 0.5;
-    let on_surface = unproject(local + sample_position(s, samples), depth);
+    let on_surface = unproject(local + sample_position(s), depth);
     let near = unproject(centre, 1.0);
     let along = unproject(centre, depth) - near;
     let facing = dot(n, along);
@@ -88,8 +88,8 @@ fn depth_at_centre(local: vec2<f32>, s: i32, samples: i32, depth: f32, n: vec3<f
 // do, so that their mean is the depth at the pixel's centre: the standard sample positions of
 // every count are centred on it. With 4 samples (the standard pattern pairs samples 0 and 3, 1
 // and 2 about the centre) that is tested exactly; with other counts, by their spread.
-fn one_surface(pixel: vec2<i32>, samples: i32) -> bool {
-    if samples == 4 {
+fn one_surface(pixel: vec2<i32>) -> bool {
+    if SAMPLES == 4 {
         let d = vec4<f32>(
             textureLoad(prepass_depth, pixel, 0),
             textureLoad(prepass_depth, pixel, 1),
@@ -100,7 +100,7 @@ fn one_surface(pixel: vec2<i32>, samples: i32) -> bool {
     }
     var lo = 1e30;
     var hi = 0.0;
-    for (var s = 0; s < samples; s += 1) {
+    for (var s = 0; s < SAMPLES; s += 1) {
         let d = textureLoad(prepass_depth, pixel, s);
         lo = min(lo, d);
         hi = max(hi, d);
@@ -121,7 +121,6 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     let local = floor(in.position.xy);
     let pixel = vec2<i32>(local + view.viewport.xy);
 #ifdef MULTISAMPLED
-    let samples = SAMPLES;
     let centre = textureLoad(centre_depth, vec2<i32>(local), 0);
     let centre_n = textureLoad(centre_normal, vec2<i32>(local), 0);
     // Of the samples on the centre's surface (depth within `SAME_SURFACE`, normal within
@@ -133,9 +132,9 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
     let gradient = textureLoad(centre_depth_gradient, vec2<i32>(local), 0).xy;
     var best = -1;
     var best_off_plane = 0.0;
-    for (var s = 0; s < samples; s += 1) {
+    for (var s = 0; s < SAMPLES; s += 1) {
         let d = textureLoad(prepass_depth, pixel, s);
-        let off_plane = abs(d - centre - dot(gradient, sample_position(s, samples) - 0.5));
+        let off_plane = abs(d - centre - dot(gradient, sample_position(s) - 0.5));
         let facing = dot(decode_normal(textureLoad(prepass_normal, pixel, s).xyz), n);
         let on_it = abs(d - centre) <= SAME_SURFACE * centre && facing >= SAME_NORMAL;
         let same = select(on_it, d == 0.0, centre == 0.0);
@@ -162,7 +161,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
         out.normal = centre_n;
 #ifdef MOTION_VECTORS
         var nearest = 0;
-        for (var s = 1; s < samples; s += 1) {
+        for (var s = 1; s < SAMPLES; s += 1) {
             let d = textureLoad(prepass_depth, pixel, s);
             if abs(d - centre) < abs(textureLoad(prepass_depth, pixel, nearest) - centre) {
                 nearest = s;
@@ -172,7 +171,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
 #endif
         return out;
     }
-    return from_samples(local, pixel, samples);
+    return from_samples(local, pixel);
 #else
     var out: FrontLayer;
     out.depth = textureLoad(prepass_depth, pixel, 0);
@@ -187,7 +186,7 @@ fn fragment(in: FullscreenVertexOutput) -> FrontLayer {
 #ifdef MULTISAMPLED
 // The front layer at a pixel whose centre sample shows an alpha-masked surface (or none) that no
 // sample lies on, from the samples alone.
-fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer {
+fn from_samples(local: vec2<f32>, pixel: vec2<i32>) -> FrontLayer {
     var out: FrontLayer;
     // Every pass reconstructs a pixel's position at its centre, but no sample lies there (those
     // of 4 samples lie 0.4 px away), and on a floor seen at a grazing angle a depth read that far
@@ -195,31 +194,31 @@ fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer 
     // the samples lie on one surface their mean is the centre's depth. At silhouettes (two
     // surfaces, whose average would be a point on neither) one sample's surface is carried to
     // the centre along its plane.
-    if one_surface(pixel, samples) {
+    if one_surface(pixel) {
         var depth = 0.0;
         var normal = vec4<f32>(0.0);
         var motion = vec4<f32>(0.0);
-        for (var s = 0; s < samples; s += 1) {
+        for (var s = 0; s < SAMPLES; s += 1) {
             depth += textureLoad(prepass_depth, pixel, s);
             normal += textureLoad(prepass_normal, pixel, s);
 #ifdef MOTION_VECTORS
             motion += textureLoad(prepass_motion_vectors, pixel, s);
 #endif
         }
-        out.depth = depth / f32(samples);
+        out.depth = depth / f32(SAMPLES);
 #ifdef MOTION_VECTORS
-        out.motion_vectors = motion / f32(samples);
+        out.motion_vectors = motion / f32(SAMPLES);
 #endif
         // Passes normalise what they decode, so the mean of the encodings is the mean normal:
         // on a normal-mapped surface, closer to the centre's than any one sample's.
-        out.normal = normal / f32(samples);
+        out.normal = normal / f32(SAMPLES);
         return out;
     }
     // At a silhouette the surface that covers most samples most likely covers the centre,
     // which is what a single-sampled prepass would show.
     var nearest = 0;
     var nearest_depth = textureLoad(prepass_depth, pixel, 0);
-    for (var s = 1; s < samples; s += 1) {
+    for (var s = 1; s < SAMPLES; s += 1) {
         let d = textureLoad(prepass_depth, pixel, s);
         // Reverse-Z: the larger depth is the nearer surface.
         if d > nearest_depth {
@@ -230,7 +229,7 @@ fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer 
     var covered = 0;
     var behind = -1;
     var behind_depth = 0.0;
-    for (var s = 0; s < samples; s += 1) {
+    for (var s = 0; s < SAMPLES; s += 1) {
         let d = textureLoad(prepass_depth, pixel, s);
         if nearest_depth - d <= SAME_SURFACE * nearest_depth {
             covered += 1;
@@ -239,13 +238,13 @@ fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer 
             behind_depth = d;
         }
     }
-    if 2 * covered <= samples && behind >= 0 {
+    if 2 * covered <= SAMPLES && behind >= 0 {
         nearest = behind;
         nearest_depth = behind_depth;
     }
     var normal = vec4<f32>(0.0);
     var same = 0.0;
-    for (var s = 0; s < samples; s += 1) {
+    for (var s = 0; s < SAMPLES; s += 1) {
         if abs(textureLoad(prepass_depth, pixel, s) - nearest_depth) <= SAME_SURFACE * nearest_depth {
             normal += textureLoad(prepass_normal, pixel, s);
             same += 1.0;
@@ -253,7 +252,7 @@ fn from_samples(local: vec2<f32>, pixel: vec2<i32>, samples: i32) -> FrontLayer 
     }
     out.normal = normal / same;
     let n = decode_normal(out.normal.xyz);
-    out.depth = depth_at_centre(local, nearest, samples, nearest_depth, n);
+    out.depth = depth_at_centre(local, nearest, nearest_depth, n);
 #ifdef MOTION_VECTORS
     out.motion_vectors = textureLoad(prepass_motion_vectors, pixel, nearest);
 #endif
