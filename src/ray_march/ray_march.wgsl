@@ -57,8 +57,10 @@ fn blocked(
         return 0;
     }
     let front_z = view_z(rows, q, size, front);
-    // A small tolerance keeps the receiver's own surface from blocking it.
-    if z > front_z - 0.01 * radius {
+    // No tolerance in depth: the rays' start height already keeps the receiver's own surface from
+    // blocking them, and a tolerance (it was a hundredth of R) hid grooves shallower than it, many
+    // pixels wide at high resolutions.
+    if z >= front_z {
         return 0;
     }
     let back = textureLoad(back_depth, q, 0);
@@ -69,7 +71,7 @@ fn blocked(
         }
         // A wall of one polygon has its back face where its front is: no step lands between
         // them, so a ray through it shows only as a step in front and the next one behind.
-        let crossed = front_z - back_z < step && previous_z > front_z - 0.01 * radius;
+        let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }
     return select(0, 1, front_z - z < radius);

@@ -51,7 +51,7 @@ fn blocked(
         return 0;
     }
     let front_z = view_position(view, q, w, h, front.depth).z;
-    if x.z > front_z - 0.01 * radius {
+    if x.z >= front_z {
         return 0;
     }
     if back.depth > 0.0 {
@@ -59,7 +59,7 @@ fn blocked(
         if x.z > back_z {
             return 1;
         }
-        let crossed = front_z - back_z < step && previous_z > front_z - 0.01 * radius;
+        let crossed = front_z - back_z < step && previous_z >= front_z;
         return i32::from(crossed);
     }
     i32::from(front_z - x.z < radius)

@@ -20,8 +20,8 @@ const CONVERGED: u32 = 2 * DEFAULT_TEMPORAL_FRAMES;
 /// A preset has converged once its RMSE is within this share of the converged one.
 const WITHIN: f32 = 1.1;
 /// After 8 frames the default's RMSE is within this share of its converged one (measured:
-/// 1.05–1.15; the clamp keeps improving the history past 8 frames on a still camera).
-const DEFAULT_AFTER_8: f32 = 1.2;
+/// 1.05–1.26; the clamp keeps improving the history past 8 frames on a still camera).
+const DEFAULT_AFTER_8: f32 = 1.3;
 
 /// The frame `frames` frames after the history was dropped. The read-back copies the frame
 /// rendered after it is asked for, so `frames - 1` are rendered before.
@@ -102,7 +102,7 @@ fn presets_converge_and_the_default_beats_bevy_ssao() {
             "{name}: preset {preset:?} converged RMSE {error} not below Bevy's High {bevy}"
         );
         if preset == AoPreset::default() {
-            // Measured: 0.08–0.21 × Bevy's RMSE; high-frequency error 0.006–0.011 against
+            // Measured: 0.07–0.21 × Bevy's RMSE; high-frequency error 0.006–0.011 against
             // Bevy's 0.012–0.023.
             assert!(
                 error <= 0.23 * bevy,
@@ -160,10 +160,10 @@ fn the_default_keeps_detail_on_third_party_models() {
             scene.name,
             error / bevy
         );
-        // Measured: 0.12–0.40 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
+        // Measured: 0.11–0.36 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
         // 0.032–0.044.
         assert!(
-            error <= 0.45 * bevy,
+            error <= 0.40 * bevy,
             "{}: RMSE {error:.4} against Bevy's {bevy:.4}",
             scene.name
         );
@@ -221,10 +221,10 @@ fn the_default_joined_to_the_far_field_holds_on_third_party_models() {
                  {near_error:.4}",
                 scene.name
             );
-            // Measured: better or equal on every model and radius but CornellBox at 0.75 m
-            // (+0.0017).
+            // Measured: better or equal on every model and radius but CesiumMan on a floor at 2 m
+            // (+0.0005).
             assert!(
-                error <= near_error + 0.004,
+                error <= near_error + 0.002,
                 "{}, R = {radius} m: default {error:.4} against the near field {near_error:.4}",
                 scene.name
             );
