@@ -37,7 +37,9 @@ mod compare;
 #[path = "../common/far_terms.rs"]
 mod far_terms;
 mod options;
+mod preflight;
 mod timings;
+mod undrawable;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -83,6 +85,10 @@ fn main() {
             std::process::exit(2);
         }
     };
+    if let Err(message) = preflight::check(&options.scene) {
+        eprintln!("ao_capture: {message}");
+        std::process::exit(1);
+    }
     let folder = options
         .scene
         .parent()
@@ -187,7 +193,8 @@ fn scene_ready(
     mut capture: ResMut<Capture>,
     children: Query<&Children>,
     cameras: Query<Option<&Projection>, With<Camera3d>>,
-    meshes: Query<(), With<Mesh3d>>,
+    meshes: Query<(&Mesh3d, Option<&Name>)>,
+    mesh_assets: Res<Assets<Mesh>>,
     players: Query<Entity, With<AnimationPlayer>>,
     gltfs: Res<Assets<Gltf>>,
     mut graphs: ResMut<Assets<AnimationGraph>>,
@@ -208,6 +215,13 @@ fn scene_ready(
         capture.failure = Some(format!("{} has no camera", capture.options.scene.display()));
         return;
     };
+    undrawable::leave_out_undrawable(
+        &mut commands,
+        ready.entity,
+        &children,
+        &meshes,
+        &mesh_assets,
+    );
     for &other in others {
         commands.entity(other).insert(Camera {
             is_active: false,
@@ -270,7 +284,13 @@ fn scene_ready(
         // cache, each in its mesh's own space).
         let scene_meshes: Vec<Entity> = children
             .iter_descendants(ready.entity)
-            .filter(|e| meshes.contains(*e))
+            .filter(|e| {
+                meshes.get(*e).is_ok_and(|(mesh, _)| {
+                    mesh_assets
+                        .get(&mesh.0)
+                        .is_none_or(|m| undrawable::why_undrawable(m).is_none())
+                })
+            })
             .collect();
         term.attach(&mut commands, &scene_meshes, (Vec3::ZERO, Vec3::ZERO), 0.0);
     }

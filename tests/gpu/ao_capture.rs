@@ -127,6 +127,23 @@ fn bad_input_gives_a_one_line_error() {
     std::fs::write(&no_camera, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
     let corrupt = dir.join("corrupt.glb");
     std::fs::write(&corrupt, b"glTF\x02\0\0\0garbage").unwrap();
+    // Two faults the glTF reader inside Bevy's loader panics on instead of reporting them.
+    let missing_accessor = dir.join("missing_accessor.glb");
+    std::fs::write(
+        &missing_accessor,
+        edit_glb(&scene_bytes(), |json| {
+            json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 999.into();
+        }),
+    )
+    .unwrap();
+    let short_stride = dir.join("short_stride.glb");
+    std::fs::write(
+        &short_stride,
+        edit_glb(&scene_bytes(), |json| {
+            json["bufferViews"][0]["byteStride"] = 4.into();
+        }),
+    )
+    .unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
         (base(&["--scene", "/nonexistent/scene.glb"]), "not found"),
         (
@@ -185,10 +202,22 @@ fn bad_input_gives_a_one_line_error() {
         ),
         (base(&["--scene", no_camera.to_str().unwrap()]), "no camera"),
         (base(&["--scene", corrupt.to_str().unwrap()]), "cannot load"),
+        (
+            base(&["--scene", missing_accessor.to_str().unwrap()]),
+            "names an object it does not have",
+        ),
+        (
+            base(&["--scene", short_stride.to_str().unwrap()]),
+            "reads elements of 12 bytes through buffer view 0, whose stride is 4 bytes",
+        ),
     ];
     for (args, expected) in cases {
         let out = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
         let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !stderr.contains("panicked"),
+            "{args:?}: nothing may panic:\n{stderr}"
+        );
         let ours: Vec<&str> = stderr
             .lines()
             .filter(|l| l.starts_with("ao_capture:"))
@@ -205,6 +234,96 @@ fn bad_input_gives_a_one_line_error() {
             ours[0]
         );
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The committed generated scene's bytes.
+fn scene_bytes() -> Vec<u8> {
+    std::fs::read(scene_path()).expect("assets/scenes/cube_on_plane.glb")
+}
+
+/// `glb` with its JSON chunk changed by `edit` (the binary chunk kept).
+fn edit_glb(glb: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_len = word(12);
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    edit(&mut json);
+    let mut json = serde_json::to_vec(&json).unwrap();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let bin = &glb[20 + json_len..];
+    let mut out = Vec::new();
+    out.extend_from_slice(&glb[0..8]);
+    out.extend_from_slice(&((12 + 8 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&glb[16..20]);
+    out.extend_from_slice(&json);
+    out.extend_from_slice(bin);
+    out
+}
+
+/// A primitive whose positions cannot be read (its accessor runs past its buffer) loads as a mesh
+/// without positions, which Bevy's prepass pipeline fails wgpu's validation on: the capture leaves
+/// that mesh out with a warning naming it and renders the rest, as the same scene without it.
+#[test]
+fn a_mesh_without_readable_positions_is_left_out_with_a_warning() {
+    let dir = temp_dir("capture_unreadable_positions");
+    let broken = dir.join("broken.glb");
+    // Accessor 3 holds the cube's positions.
+    std::fs::write(
+        &broken,
+        edit_glb(&scene_bytes(), |json| {
+            json["accessors"][3]["count"] = 24_000.into();
+        }),
+    )
+    .unwrap();
+    let without = dir.join("without.glb");
+    let (meshes, nodes) = gltf_scene::cube_on_plane();
+    let nodes: Vec<_> = nodes
+        .into_iter()
+        .filter(|n| !matches!(n.kind, NodeKind::Mesh(1)))
+        .collect();
+    std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
+    let capture = |scene: &Path, name: &str| {
+        let out_ao = dir.join(name);
+        let out = run(&[
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--radius",
+            "0.75",
+            "--technique",
+            "near-field",
+            "--out-ao",
+            out_ao.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{name}: capture failed:\n{stderr}");
+        (
+            read_visibility_png(&out_ao).expect("the capture's PNG").2,
+            stderr,
+        )
+    };
+    let (broken_image, log) = capture(&broken, "broken.png");
+    let warnings: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains("is left out: it has no readable POSITION attribute"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "one warning, naming the mesh:\n{log}");
+    assert!(!log.contains("panicked"), "nothing may panic:\n{log}");
+    let (expected, _) = capture(&without, "without.png");
+    let darkest = expected.iter().copied().fold(1.0f32, f32::min);
+    assert!(
+        darkest < 0.9,
+        "the pillar occludes the floor in the scene without the cube: darkest {darkest}"
+    );
+    let error = rmse(&broken_image, &expected, None);
+    assert!(
+        error < 1e-4,
+        "the rest of the scene renders as without the broken mesh: RMSE {error}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
