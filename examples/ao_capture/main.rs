@@ -193,7 +193,11 @@ fn scene_ready(
     mut capture: ResMut<Capture>,
     children: Query<&Children>,
     cameras: Query<Option<&Projection>, With<Camera3d>>,
-    meshes: Query<(&Mesh3d, Option<&Name>)>,
+    meshes: Query<(
+        &Mesh3d,
+        Option<&Name>,
+        Has<bevy::mesh::skinning::SkinnedMesh>,
+    )>,
     mesh_assets: Res<Assets<Mesh>>,
     players: Query<Entity, With<AnimationPlayer>>,
     gltfs: Res<Assets<Gltf>>,
@@ -285,7 +289,7 @@ fn scene_ready(
         let scene_meshes: Vec<Entity> = children
             .iter_descendants(ready.entity)
             .filter(|e| {
-                meshes.get(*e).is_ok_and(|(mesh, _)| {
+                meshes.get(*e).is_ok_and(|(mesh, _, _)| {
                     mesh_assets
                         .get(&mesh.0)
                         .is_none_or(|m| undrawable::why_undrawable(m).is_none())

@@ -1,9 +1,12 @@
 //! Meshes Bevy cannot draw: a glTF primitive whose `POSITION` accessor could not be read (it runs
 //! past its buffer, or holds other than three floats per vertex) loads as a mesh without
-//! positions, and Bevy's prepass pipeline fails wgpu's validation on it, which ends the app with
-//! no image. The capture leaves such meshes out with a warning instead, and renders the rest.
+//! positions, and Bevy's prepass pipeline fails wgpu's validation on it; a skinned node whose
+//! mesh has no usable `JOINTS_0` or `WEIGHTS_0` fails it in the skinned draw. Either ends the app
+//! with no image. The capture leaves such meshes out, or draws such a node unskinned in its rest
+//! pose, with a warning naming it, and renders the rest.
 
 use bevy::mesh::VertexAttributeValues;
+use bevy::mesh::skinning::SkinnedMesh;
 use bevy::prelude::*;
 
 /// Why `mesh` cannot be drawn, or `None` where it can.
@@ -17,23 +20,48 @@ pub fn why_undrawable(mesh: &Mesh) -> Option<&'static str> {
     }
 }
 
-/// Takes `Mesh3d` off every mesh under `root` that Bevy cannot draw, naming each in a warning.
+/// Why `mesh` cannot be skinned, or `None` where it can (the formats Bevy's glTF loader gives
+/// readable joints and weights).
+pub fn why_unskinnable(mesh: &Mesh) -> Option<&'static str> {
+    let joints = mesh.try_attribute_option(Mesh::ATTRIBUTE_JOINT_INDEX);
+    let weights = mesh.try_attribute_option(Mesh::ATTRIBUTE_JOINT_WEIGHT);
+    match (joints, weights) {
+        (Err(_), _) | (_, Err(_)) => None,
+        (
+            Ok(Some(VertexAttributeValues::Uint16x4(_))),
+            Ok(Some(VertexAttributeValues::Float32x4(_))),
+        ) => None,
+        (Ok(None), _) => Some("its mesh has no readable JOINTS_0 attribute"),
+        (_, Ok(None)) => Some("its mesh has no readable WEIGHTS_0 attribute"),
+        _ => {
+            Some("its mesh's JOINTS_0 or WEIGHTS_0 attribute has a format Bevy does not skin with")
+        }
+    }
+}
+
+/// Takes `Mesh3d` off every mesh under `root` that Bevy cannot draw, and `SkinnedMesh` off every
+/// one it cannot skin, naming each in a warning.
 pub fn leave_out_undrawable(
     commands: &mut Commands,
     root: Entity,
     children: &Query<&Children>,
-    meshes: &Query<(&Mesh3d, Option<&Name>)>,
+    meshes: &Query<(&Mesh3d, Option<&Name>, Has<SkinnedMesh>)>,
     assets: &Assets<Mesh>,
 ) {
     for entity in children.iter_descendants(root) {
-        let Ok((mesh, name)) = meshes.get(entity) else {
+        let Ok((mesh, name, skinned)) = meshes.get(entity) else {
             continue;
         };
-        let Some(why) = assets.get(&mesh.0).and_then(why_undrawable) else {
+        let Some(mesh) = assets.get(&mesh.0) else {
             continue;
         };
         let name = name.map_or_else(|| format!("{entity}"), |n| format!("'{n}'"));
-        warn!("ao_capture: mesh {name} is left out: {why} (the file's accessor could not be read)");
-        commands.entity(entity).remove::<Mesh3d>();
+        if let Some(why) = why_undrawable(mesh) {
+            warn!("mesh {name} is left out: {why} (the file's accessor could not be read)");
+            commands.entity(entity).remove::<Mesh3d>();
+        } else if let Some(why) = why_unskinnable(mesh).filter(|_| skinned) {
+            warn!("mesh {name} is drawn unskinned, in its rest pose: {why}");
+            commands.entity(entity).remove::<SkinnedMesh>();
+        }
     }
 }

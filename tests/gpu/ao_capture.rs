@@ -327,6 +327,66 @@ fn a_mesh_without_readable_positions_is_left_out_with_a_warning() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A skinned node whose mesh has no joint indices fails Bevy's skinned draw (wgpu's validation
+/// ends the app): the capture draws it unskinned, in its rest pose, with a warning naming it.
+#[test]
+fn a_skinned_mesh_without_joints_is_drawn_unskinned_with_a_warning() {
+    let dir = temp_dir("capture_unskinnable");
+    let walker =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/characters/walker.glb"))
+            .expect("assets/characters/walker.glb");
+    let broken = dir.join("walker_without_joints.glb");
+    std::fs::write(
+        &broken,
+        edit_glb(&walker, |json| {
+            json["meshes"][0]["primitives"][0]["attributes"]
+                .as_object_mut()
+                .unwrap()
+                .remove("JOINTS_0");
+            json["cameras"] = serde_json::json!([
+                { "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } }
+            ]);
+            let nodes = json["nodes"].as_array_mut().unwrap();
+            nodes.push(serde_json::json!({ "camera": 0, "translation": [0.0, 1.0, 4.0] }));
+            let camera = nodes.len() - 1;
+            json["scenes"][0]["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(camera.into());
+        }),
+    )
+    .unwrap();
+    let out_ao = dir.join("ao.png");
+    let out = run(&[
+        "--scene",
+        broken.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--radius",
+        "0.75",
+        "--technique",
+        "near-field",
+        "--out-ao",
+        out_ao.to_str().unwrap(),
+    ]);
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "the capture failed:\n{log}");
+    assert!(!log.contains("panicked"), "nothing may panic:\n{log}");
+    let warnings = log
+        .lines()
+        .filter(|l| {
+            l.contains("is drawn unskinned, in its rest pose: its mesh has no readable JOINTS_0")
+        })
+        .count();
+    assert_eq!(warnings, 1, "one warning, naming the mesh:\n{log}");
+    let (_, _, visibility) = read_visibility_png(&out_ao).expect("the capture's PNG");
+    let shown = visibility.iter().filter(|v| **v < 0.999).count();
+    assert!(shown > 0, "the walker's rest pose shows occlusion");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The generated scene posed at `time`, as triangles, and its camera.
 fn generated_scene(time: f32, width: u32, height: u32) -> (Bvh, ViewMatrices) {
     let (meshes, nodes) = gltf_scene::cube_on_plane();
