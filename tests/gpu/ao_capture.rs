@@ -261,6 +261,31 @@ fn edit_glb(glb: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
     out
 }
 
+/// A 64 × 48 near-field capture of `scene` into `out_ao`, which must succeed; its stderr.
+fn capture_near_field(scene: &Path, out_ao: &Path) -> String {
+    let out = run(&[
+        "--scene",
+        scene.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--radius",
+        "0.75",
+        "--technique",
+        "near-field",
+        "--out-ao",
+        out_ao.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(
+        out.status.success(),
+        "{}: capture failed:\n{stderr}",
+        scene.display()
+    );
+    stderr
+}
+
 /// A primitive whose positions cannot be read (its accessor runs past its buffer) loads as a mesh
 /// without positions, which Bevy's prepass pipeline fails wgpu's validation on: the capture leaves
 /// that mesh out with a warning naming it and renders the rest, as the same scene without it.
@@ -285,22 +310,7 @@ fn a_mesh_without_readable_positions_is_left_out_with_a_warning() {
     std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
     let capture = |scene: &Path, name: &str| {
         let out_ao = dir.join(name);
-        let out = run(&[
-            "--scene",
-            scene.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--radius",
-            "0.75",
-            "--technique",
-            "near-field",
-            "--out-ao",
-            out_ao.to_str().unwrap(),
-        ]);
-        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert!(out.status.success(), "{name}: capture failed:\n{stderr}");
+        let stderr = capture_near_field(scene, &out_ao);
         (
             read_visibility_png(&out_ao).expect("the capture's PNG").2,
             stderr,
@@ -357,22 +367,7 @@ fn a_skinned_mesh_without_joints_is_drawn_unskinned_with_a_warning() {
     )
     .unwrap();
     let out_ao = dir.join("ao.png");
-    let out = run(&[
-        "--scene",
-        broken.to_str().unwrap(),
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "--radius",
-        "0.75",
-        "--technique",
-        "near-field",
-        "--out-ao",
-        out_ao.to_str().unwrap(),
-    ]);
-    let log = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "the capture failed:\n{log}");
+    let log = capture_near_field(&broken, &out_ao);
     assert!(!log.contains("panicked"), "nothing may panic:\n{log}");
     let warnings = log
         .lines()
