@@ -9,6 +9,7 @@
 //! models come from `../shared/assets` (or `DYNAMIC_AO_SHARED_ASSETS`) and are skipped where
 //! that folder is absent. `-- --scenes a,b` runs the scenes whose names contain a word of the
 //! list; `-- --radii 0.75` picks radii; `-- --out DIR` writes each image as a 16-bit PNG;
+//! `-- --terms voxels` picks far-field terms (`spheres`, `fields`, `voxels`);
 //! `-- --proxies` also compares each model's sphere-occluder proxies with the model itself;
 //! `-- --default` joins the far field to the crate's default image-space technique (the
 //! accumulated ray march at half resolution, read after 30 frames) instead of the near field.
@@ -144,7 +145,15 @@ fn main() {
         std::fs::create_dir_all(out).expect("output folder");
     }
     let shared = models::shared_assets();
-    let configs = configs();
+    let terms: Option<Vec<FarTerm>> =
+        value("--terms").map(|s| s.split(',').filter_map(FarTerm::from_name).collect());
+    let configs: Vec<Config> = configs()
+        .into_iter()
+        .filter(|c| {
+            c.far
+                .is_none_or(|far| terms.as_ref().is_none_or(|t| t.contains(&far)))
+        })
+        .collect();
 
     let mut scenes: Vec<FarScene> = far_scenes::procedural();
     scenes.push(far_scenes::walker_on_floor());

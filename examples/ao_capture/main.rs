@@ -26,8 +26,8 @@
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
-//! baked for every mesh; `voxels`: one `VoxelAoVolume` around the scene's bounds grown by the
-//! radius, with d_max the radius) and each image-space one with `+spheres`, `+fields` or
+//! baked for every mesh; `voxels`: one `VoxelAoVolume` over what occludes the surfaces the
+//! camera sees within the radius, traced on the CPU, reaching the radius) and each image-space one with `+spheres`, `+fields` or
 //! `+voxels` added. Bevy's own SSAO (`bevy-ssao`) has a radius
 //! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
 
@@ -59,6 +59,7 @@ use bevy::render::{
 };
 use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
 use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
+use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
@@ -326,10 +327,11 @@ fn scene_ready(
 /// Frames rendered before the view's surfaces are read to place the voxel volume.
 const FRAMES_BEFORE_PLACING: u32 = 3;
 
-/// `--technique voxels`: one volume over the scene's bounds cut down to the surfaces the camera
-/// sees, grown by the radius (only occluders that close can reach them), so its cells are as fine
-/// as the view allows; its rays reach as far as the radius. The view's surfaces come from the
-/// front layer of the ND-buffer after a few frames.
+/// `--technique voxels`: one volume over what occludes the surfaces the camera sees within the
+/// radius (`far_terms::occluder_bounds`, traced on the CPU against the posed scene), so its
+/// cells are as fine as the occlusion allows; its rays reach as far as the radius. The view's
+/// surfaces come from the front layer of the ND-buffer after a few frames. Where nothing
+/// occludes them, the volume covers the whole scene.
 fn place_volume(world: &mut World) {
     let capture = world.resource::<Capture>();
     let (Stage::Rendering { .. }, Some(FarTerm::Voxels), None, Some(root), Some(readback)) = (
@@ -386,15 +388,22 @@ fn place_volume(world: &mut World) {
         .map(|(transform, camera)| {
             ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
         });
-    let visible = view.and_then(|view| far_terms::visible_bounds(&texels, width, height, &view));
-    let region = far_terms::voxel_region((lo, hi), visible, radius);
+    let bvh = Bvh::new(scene.triangles);
+    let region = view
+        .and_then(|view| far_terms::occluder_bounds(&bvh, &texels, width, height, &view, radius))
+        .unwrap_or((lo, hi));
     let meshes: Vec<Entity> = below
         .iter()
         .copied()
         .filter(|e| world.get::<Mesh3d>(*e).is_some())
         .collect();
     let mut commands = world.commands();
-    let volume = FarTerm::Voxels.attach(&mut commands, &meshes, region, radius);
+    let volume = FarTerm::Voxels.attach(
+        &mut commands,
+        &meshes,
+        region,
+        far_terms::VOXEL_MARGIN * radius,
+    );
     world.flush();
     if let Some(volume) = volume
         && let Some(mut settings) = world.get_mut::<VoxelAoVolume>(volume)

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 use bevy::prelude::*;
+use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
 
@@ -15,7 +16,7 @@ pub enum FarTerm {
     Spheres,
     /// An AO field baked for every mesh.
     Fields,
-    /// One voxel volume around the whole scene, grown by the radius.
+    /// One voxel volume over what occludes the surfaces the camera sees (`occluder_bounds`).
     Voxels,
 }
 
@@ -42,15 +43,14 @@ impl FarTerm {
     }
 
     /// Gives every mesh in `meshes` this term's occluder component; for voxels, spawns one volume
-    /// over the world-space box `[lo, hi]` grown by `radius` (so occluders at its rim still reach
-    /// the surfaces inside) and returns it. Every setting is the plugin's default: the volume
-    /// reaches as far as the camera's radius.
+    /// over the world-space box `[lo, hi]` grown by `margin` metres and returns it. Every setting
+    /// is the plugin's default: the volume reaches as far as the camera's radius.
     pub fn attach(
         self,
         commands: &mut Commands,
         meshes: &[Entity],
         (lo, hi): (Vec3, Vec3),
-        radius: f32,
+        margin: f32,
     ) -> Option<Entity> {
         match self {
             Self::Spheres => {
@@ -70,7 +70,7 @@ impl FarTerm {
                     .spawn((
                         Transform::from_translation((lo + hi) / 2.0),
                         VoxelAoVolume {
-                            half_extents: (hi - lo) / 2.0 + radius,
+                            half_extents: (hi - lo) / 2.0 + margin,
                             ..default()
                         },
                     ))
@@ -80,43 +80,62 @@ impl FarTerm {
     }
 }
 
-/// The world-space bounds of the surfaces a camera sees: the front layer of its ND-buffer
-/// (`texels`, row-major, `width` × `height`) unprojected. `None` where it sees nothing.
-pub fn visible_bounds(
+/// How far a volume over [`occluder_bounds`] reaches past them, as a share of the radius: the
+/// bounds' rim passes through the outermost hits, whose triangles reach a little farther.
+pub const VOXEL_MARGIN: f32 = 0.05;
+
+/// Hemisphere rays each sampled surface traces in [`occluder_bounds`].
+const PLACEMENT_RAYS: u32 = 16;
+/// Most surfaces [`occluder_bounds`] samples: the front layer is thinned to about this many.
+const PLACEMENT_SURFACES: u32 = 20_000;
+
+/// The world-space bounds of what occludes the surfaces a camera sees within `radius`: from
+/// surfaces of the front layer of its ND-buffer (`texels`, row-major, `width` × `height`, thinned
+/// to about 20,000), 16 cosine-weighted rays each are traced against `bvh`, and the bounds hold
+/// every point they hit. A voxel volume needs cells only there: a ray from any surface the
+/// camera sees ends at an occluder inside them or at none, and an open floor far from anything,
+/// which occludes nothing the camera sees, takes no cells, so they are as fine as the
+/// occlusion allows. `None` where no ray hits anything.
+pub fn occluder_bounds(
+    bvh: &Bvh,
     texels: &[NdTexel],
     width: u32,
     height: u32,
     view: &ViewMatrices,
+    radius: f32,
 ) -> Option<(Vec3, Vec3)> {
+    let stride = ((width * height) as f32 / PLACEMENT_SURFACES as f32)
+        .sqrt()
+        .ceil()
+        .max(1.0) as u32;
+    let eye = view.view_from_world.inverse().w_axis.truncate();
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for (i, t) in texels.iter().enumerate() {
-        if t.depth <= 0.0 {
-            continue;
-        }
-        let (x, y) = ((i as u32 % width) as i32, (i as u32 / width) as i32);
-        let p = view.world_position(x, y, width, height, t.depth);
-        if p.is_finite() {
-            lo = lo.min(p);
-            hi = hi.max(p);
+    for y in (0..height).step_by(stride as usize) {
+        for x in (0..width).step_by(stride as usize) {
+            let t = texels[(y * width + x) as usize];
+            if t.depth <= 0.0 || t.normal == Vec3::ZERO {
+                continue;
+            }
+            let p = view.world_position(x as i32, y as i32, width, height, t.depth);
+            if !p.is_finite() {
+                continue;
+            }
+            // Off the surface by more than the depth buffer's error at that distance, so that
+            // no ray hits the surface it leaves.
+            let start = p + t.normal * (1e-3 * p.distance(eye) + 1e-4);
+            let (t1, t2) = t.normal.any_orthonormal_pair();
+            for i in 0..PLACEMENT_RAYS {
+                let u = (i as f32 + 0.5) / PLACEMENT_RAYS as f32;
+                let phi = std::f32::consts::TAU * (i as f32 * 0.618_034).fract();
+                let r = u.sqrt();
+                let d = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + t.normal * (1.0 - u).sqrt();
+                if let Some(hit) = bvh.closest_hit(start, d, 0.0, radius) {
+                    let q = start + d * hit.t;
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+            }
         }
     }
     lo.is_finite().then_some((lo, hi))
-}
-
-/// Where one voxel volume over a scene serves a camera best: the scene's bounds, cut down to the
-/// surfaces the camera sees grown by `radius` (only occluders that close can reach them), so its
-/// cells are as fine as the view allows.
-pub fn voxel_region(
-    scene: (Vec3, Vec3),
-    visible: Option<(Vec3, Vec3)>,
-    radius: f32,
-) -> (Vec3, Vec3) {
-    let Some((lo, hi)) = visible else {
-        return scene;
-    };
-    let (lo, hi) = (
-        scene.0.max(lo - Vec3::splat(radius)),
-        scene.1.min(hi + Vec3::splat(radius)),
-    );
-    if lo.cmple(hi).all() { (lo, hi) } else { scene }
 }

@@ -119,6 +119,14 @@ impl VoxelAoVolume {
     pub const MAX_RAYS: u32 = 256;
     /// Most steps per ray of [`VoxelMarch::Steps`].
     pub const MAX_STEPS: u32 = 64;
+    /// How far, in cells, a ray of [`VoxelMarch::Cells`] travels through occupied cells before
+    /// it counts as blocked (`HIT_DEPTH` in `voxel_ao.wgsl`). Conservative voxelization grows
+    /// every occluder by up to a cell on each side, and a ray that only grazes that rim is not
+    /// blocked by the mesh; a ray across the thinnest occluder, a plane one cell thick, travels
+    /// at least one cell. 0.9 lowered the voxel term's error on every scene of `cargo bench
+    /// --bench far_field` (characters on a floor by about a tenth); 1.5 let rays slip through
+    /// floors and walls.
+    pub const HIT_DEPTH: f32 = 0.9;
     /// Default half extents, metres.
     pub const DEFAULT_HALF_EXTENTS: Vec3 = Vec3::splat(2.0);
     /// Default resolution (table 1).

@@ -2,16 +2,16 @@
 // and 4), one value per pixel of a half-resolution AO map. Each pixel traces `rays` rays over its
 // hemisphere (a cone of `spread`), jittered by a hash of its world-space position so the pattern
 // sticks to surfaces when the camera moves (and turned every frame under temporal accumulation,
-// whose pass follows this one). A ray is blocked by the first occupied cell closer
-// than the reach (the camera's radius R unless the volume sets d_max): by default found by
-// walking every cell the ray crosses, or, as the paper does, by `steps` evenly spaced tests. A
-// blocked ray counts with the cosine to the normal, fully (what ground truth measures) or with
-// Wendland's weight of its distance (eq. 3). The sum is normalized by the sum of the cosines, so a
-// surface enclosed at distance 0 reads 1. Counted once: under `FarFieldBlend::CountOnce` hits
-// closer than the near field's reach go to the first channel unless the ND-buffer holds them
-// (the near field counts those), farther ones to the second, as a share of the rays the near
-// ones leave open. Where volumes overlap, the largest occlusion wins, per channel. `reference::voxels::volume_occlusion` is the CPU
-// twin.
+// whose pass follows this one). A ray is blocked once it has crossed most of a cell's width of
+// occupied cells closer than the reach (the camera's radius R unless the volume sets d_max):
+// by default found by walking every cell the ray crosses, or, as the paper does, at the first of
+// `steps` evenly spaced tests that lands in one. A blocked ray counts with the cosine to the
+// normal, fully (what ground truth measures) or with Wendland's weight of its distance (eq. 3).
+// The sum is normalized by the sum of the cosines, so a surface enclosed at distance 0 reads 1.
+// Counted once: under `FarFieldBlend::CountOnce` hits closer than the near field's reach go to
+// the first channel unless the ND-buffer holds them (the near field counts those), farther ones
+// to the second, as a share of the rays the near ones leave open. Where volumes overlap, the
+// largest occlusion wins, per channel. `reference::voxels::volume_occlusion` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
@@ -22,6 +22,9 @@
     VoxelParams, VoxelVolume, cell_hash, cell_index, ray_direction, to_grid, to_grid_direction,
     unit_float,
 }
+
+// Cells a ray travels through occupied cells before it is blocked: `VoxelAoVolume::HIT_DEPTH`.
+const HIT_DEPTH: f32 = 0.9;
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var depth_texture: texture_depth_2d;
@@ -53,8 +56,10 @@ fn safe_inverse(v: vec3<f32>) -> vec3<f32> {
     return select(1.0 / v, s * 1e30, tiny);
 }
 
-// World distance along the ray to the first occupied cell it enters, walking every cell it
-// crosses (Amanatides & Woo 1987); −1 when none lies within `reach`.
+// World distance along the ray to where it has travelled HIT_DEPTH cells through occupied cells
+// in a row, walking every cell it crosses (Amanatides & Woo 1987); −1 when that lies beyond
+// `reach`. A ray that only grazes the rim conservative voxelization adds to every occluder is
+// not blocked.
 fn first_hit_cells(volume: VoxelVolume, origin: vec3<f32>, direction: vec3<f32>, reach: f32) -> f32 {
     let g0 = to_grid(volume, origin);
     let gd = to_grid_direction(volume, direction);
@@ -75,9 +80,18 @@ fn first_hit_cells(volume: VoxelVolume, origin: vec3<f32>, direction: vec3<f32>,
     let boundary = vec3<f32>(cell) + select(vec3<f32>(0.0), vec3<f32>(1.0), gd > vec3<f32>(0.0));
     var next = (boundary - g0) * inverse;
     let delta = abs(inverse);
+    let grid_per_metre = length(gd);
+    var inside = 0.0;
     for (var i = 0u; i < 3u * volume.resolution + 3u; i++) {
+        let exit = min(min(next.x, next.y), min(next.z, end));
         if occupied_cell(volume, cell) {
-            return t;
+            let through = (exit - t) * grid_per_metre;
+            if inside + through >= HIT_DEPTH {
+                return t + (HIT_DEPTH - inside) / grid_per_metre;
+            }
+            inside += through;
+        } else {
+            inside = 0.0;
         }
         if next.x <= next.y && next.x <= next.z {
             t = next.x;

@@ -161,11 +161,40 @@ fn an_open_floor_does_not_darken_itself() {
     }
 }
 
+/// Renders `run`'s image-space technique alone and joined to each far-field term at `radius`,
+/// prints their RMSE against ground truth as `base` and `base+term`, and checks each joined one
+/// against `bound` of the one alone.
+fn check_joined(
+    run: &mut FarRun,
+    bvh: &Bvh,
+    name: &str,
+    base: &str,
+    radius: f32,
+    bound: impl Fn(f32) -> f32,
+) {
+    let alone = run.render(true, None, count_once(), radius);
+    let truth = alone.ground_truth(bvh, radius);
+    let mask = alone.geometry_mask();
+    let alone_error = rmse(&alone.visibility, &truth, Some(&mask));
+    let mut line = format!("{name}, R = {radius} m: RMSE {base} {alone_error:.4}");
+    for term in FarTerm::ALL {
+        let joined = run.render(true, Some(term), count_once(), radius);
+        let error = rmse(&joined.visibility, &truth, Some(&mask));
+        line += &format!(", {base}+{} {error:.4}", term.name());
+        assert!(
+            error <= bound(alone_error),
+            "{name}, R = {radius} m: {base}+{} {error:.4} against {base} alone {alone_error:.4}",
+            term.name()
+        );
+    }
+    println!("{line}");
+}
+
 /// In view, the near field already sees the occluders: joined to it, each term must not make the
-/// image worse at 0.75 m (measured 6–48 % better here, 1–50 % on the benchmark's models: beyond
+/// image worse at 0.75 m (measured 10–48 % better here, 6–50 % on the benchmark's models: beyond
 /// its 0.5 m reach the proxies are more accurate than image-space samples); at 2 m, where the
 /// screen holds little of what occludes and the near field's samples stand for large patches,
-/// each must cut the error by 30 % (measured 35–71 % here, 36–72 % on the benchmark's models).
+/// each must cut the error by 30 % (measured 35–72 % here, 35–73 % on the benchmark's models).
 /// Boxes, a wall and a ball on a floor, a room open at the front with boxes inside (where joining
 /// every box proxy by one union made the image worse than the near field), and the project's
 /// skinned walker mid-stride.
@@ -175,35 +204,40 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
     all.truncate(4);
     all.push(far_scenes::walker_on_floor());
     for scene in all {
-        let name = scene.name;
         let mut run = FarRun::new(&scene, None);
         let bvh = run.bvh();
-        for radius in RADII {
-            let near = run.render(true, None, count_once(), radius);
-            let truth = near.ground_truth(&bvh, radius);
-            let mask = near.geometry_mask();
-            let near_error = rmse(&near.visibility, &truth, Some(&mask));
-            let mut line = format!("{name}, R = {radius} m: RMSE near {near_error:.4}");
-            for term in FarTerm::ALL {
-                let joined = run.render(true, Some(term), count_once(), radius);
-                let error = rmse(&joined.visibility, &truth, Some(&mask));
-                line += &format!(", near+{} {error:.4}", term.name());
-                if radius < 1.0 {
-                    assert!(
-                        error <= near_error,
-                        "{name}, R = {radius} m: near+{} {error} vs near {near_error}",
-                        term.name()
-                    );
-                } else {
-                    assert!(
-                        error <= 0.70 * near_error,
-                        "{name}, R = {radius} m: near+{} {error} vs near {near_error}",
-                        term.name()
-                    );
-                }
-            }
-            println!("{line}");
-        }
+        check_joined(&mut run, &bvh, scene.name, "near", 0.75, |near| near);
+        check_joined(&mut run, &bvh, scene.name, "near", 2.0, |near| 0.70 * near);
+    }
+}
+
+/// Each term joined to the crate's default image-space technique (the accumulated ray march)
+/// on characters standing on a floor, every mesh an occluder: never worse than the default alone
+/// at 0.75 m, and at 2 m, where most of what occludes a character lies beyond the near field's
+/// reach, at least a fifth better. Measured (this release's build): at 0.75 m the walker's error
+/// falls by 1–15%, CesiumMan's by 7–10%; at 2 m by 24–42%. CesiumMan needs `../shared/assets`.
+#[test]
+fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
+    let mut scenes = vec![(far_scenes::walker_on_floor(), None)];
+    let shared = crate::models::shared_assets();
+    if let Some(folder) = shared.as_ref().and_then(|p| p.to_str()) {
+        scenes.extend(
+            far_scenes::third_party()
+                .into_iter()
+                .filter(|s| s.name == "CesiumMan on floor")
+                .map(|s| (s, Some(folder))),
+        );
+    }
+    for (scene, folder) in scenes {
+        let mut run = FarRun::new(&scene, folder);
+        run.image_space = DynamicAo::default();
+        let bvh = run.bvh();
+        check_joined(&mut run, &bvh, scene.name, "default", 0.75, |alone| {
+            alone + 0.0005
+        });
+        check_joined(&mut run, &bvh, scene.name, "default", 2.0, |alone| {
+            0.8 * alone
+        });
     }
 }
 

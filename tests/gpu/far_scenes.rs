@@ -234,8 +234,8 @@ impl FarRun {
         panic!("fields or proxies were not ready in 3000 frames");
     }
 
-    /// One volume over the part of the scene the view needs at `radius`, as `ao_capture` places
-    /// it: the scene's bounds cut to the visible surfaces grown by the radius.
+    /// One volume over what occludes the surfaces the view shows within `radius`, as `ao_capture`
+    /// places it (`far_terms::occluder_bounds`; the scene's bounds where nothing does).
     fn place_volume(&mut self, radius: f32) {
         if self.volume.is_some_and(|(_, r)| r == radius) {
             return;
@@ -245,15 +245,19 @@ impl FarRun {
         }
         self.gpu.set_ao(|ao| FarTerm::select(None, ao));
         let seen = self.gpu.frame(2);
-        let region = far_terms::voxel_region(
-            self.bounds,
-            far_terms::visible_bounds(&seen.nd.front, WIDTH, HEIGHT, &seen.view),
-            radius,
-        );
+        let bvh = self.bvh();
+        let region =
+            far_terms::occluder_bounds(&bvh, &seen.nd.front, WIDTH, HEIGHT, &seen.view, radius)
+                .unwrap_or(self.bounds);
         let world = self.gpu.app.world_mut();
         let mut commands = world.commands();
         let volume = FarTerm::Voxels
-            .attach(&mut commands, &self.meshes, region, radius)
+            .attach(
+                &mut commands,
+                &self.meshes,
+                region,
+                far_terms::VOXEL_MARGIN * radius,
+            )
             .expect("a volume");
         world.flush();
         self.volume = Some((volume, radius));

@@ -8,7 +8,7 @@ use super::filter::wendland;
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::{pcg_hash, tangent_frame};
 use crate::geometry::triangles::Triangle;
-use crate::voxels::{VoxelFalloff, VoxelMarch, VoxelRays};
+use crate::voxels::{VoxelAoVolume, VoxelFalloff, VoxelMarch, VoxelRays};
 
 /// A bit grid of `resolution`³ cells; cell (x, y, z) is bit `i % 32` of word `i / 32`,
 /// `i = x + resolution · (y + resolution · z)`, in two layers: the surface cells triangles touch,
@@ -257,9 +257,10 @@ fn safe_inverse(v: Vec3) -> Vec3 {
     Vec3::new(one(v.x), one(v.y), one(v.z))
 }
 
-/// World distance along the ray to the first occupied cell it enters, walking every cell it
+/// World distance along the ray to where it has travelled
+/// [`VoxelAoVolume::HIT_DEPTH`] cells through occupied cells in a row, walking every cell it
 /// crosses (Amanatides & Woo 1987), exactly as `first_hit_cells` in `voxel_ao.wgsl`; `None`
-/// when none lies within `reach`.
+/// when that lies beyond `reach`.
 pub fn first_hit_cells(grid: &VoxelGrid, origin: Vec3, direction: Vec3, reach: f32) -> Option<f32> {
     let g0 = grid.grid_from_world.transform_point3(origin);
     let gd = grid.grid_from_world.transform_vector3(direction);
@@ -292,9 +293,18 @@ pub fn first_hit_cells(grid: &VoxelGrid, origin: Vec3, direction: Vec3, reach: f
     );
     let mut next = (boundary - g0) * inverse;
     let delta = inverse.abs();
+    let grid_per_metre = gd.length();
+    let mut inside = 0.0;
     for _ in 0..3 * grid.resolution + 3 {
         if grid.occupied(cell) {
-            return Some(t);
+            let exit = next.min_element().min(end);
+            let through = (exit - t) * grid_per_metre;
+            if inside + through >= VoxelAoVolume::HIT_DEPTH {
+                return Some(t + (VoxelAoVolume::HIT_DEPTH - inside) / grid_per_metre);
+            }
+            inside += through;
+        } else {
+            inside = 0.0;
         }
         let axis = if next.x <= next.y && next.x <= next.z {
             0
