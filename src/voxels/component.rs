@@ -124,8 +124,8 @@ impl VoxelAoVolume {
     /// every occluder by up to a cell on each side, and a ray that only grazes that rim is not
     /// blocked by the mesh; a ray across the thinnest occluder, a plane one cell thick, travels
     /// at least one cell. 0.9 lowered the voxel term's error on every scene of `cargo bench
-    /// --bench far_field` (characters on a floor by about a tenth); 1.5 let rays slip through
-    /// floors and walls.
+    /// --bench far_field` it was tried on (characters, rooms, a box and a wall off-screen;
+    /// characters on a floor by about a tenth); 1.5 let rays slip through floors and walls.
     pub const HIT_DEPTH: f32 = 0.9;
     /// Default half extents, metres.
     pub const DEFAULT_HALF_EXTENTS: Vec3 = Vec3::splat(2.0);
