@@ -28,7 +28,7 @@
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
 //! baked for every mesh; `voxels`: one `VoxelAoVolume` over what occludes the surfaces the
 //! camera sees within the radius, traced on the CPU, reaching the radius) and each image-space
-//! one with `+spheres`, `+fields` or `+voxels` added. Bevy's own SSAO (`bevy-ssao`) has a radius
+//! one, and `default`, with `+spheres`, `+fields` or `+voxels` added. Bevy's own SSAO (`bevy-ssao`) has a radius
 //! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
 
 #[path = "../common/mod.rs"]

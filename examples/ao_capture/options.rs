@@ -25,12 +25,23 @@ pub fn technique_names() -> Vec<String> {
         .map(str::to_string)
         .collect();
     names.extend(FarTerm::ALL.map(|term| term.name().to_string()));
+    names.extend(FarTerm::ALL.map(|term| format!("{DEFAULT_TECHNIQUE}+{}", term.name())));
     for (name, technique) in AoTechnique::ALL {
         if !matches!(technique, AoTechnique::Off | AoTechnique::BevySsao) {
             names.extend(FarTerm::ALL.map(|term| format!("{name}+{}", term.name())));
         }
     }
     names
+}
+
+/// What `--technique default` or `default+TERM` asks for: the far-field term, if any; `None`
+/// for any other name.
+fn parse_default(name: &str) -> Option<Option<FarTerm>> {
+    match name.split_once('+') {
+        None => (name == DEFAULT_TECHNIQUE).then_some(None),
+        Some((DEFAULT_TECHNIQUE, far)) => FarTerm::from_name(far).map(Some),
+        Some(_) => None,
+    }
 }
 
 /// What a technique name asks for: the image-space technique and the far-field term.
@@ -63,7 +74,8 @@ pub struct Options {
     /// World-space AO radius, metres.
     pub radius: f32,
     pub technique: AoTechnique,
-    /// `--technique default`: everything as `DynamicAo::from_preset(preset)` sets it.
+    /// `--technique default` (or `default+TERM`): everything as `DynamicAo::from_preset(preset)`
+    /// sets it (with the far-field term).
     pub default_technique: bool,
     /// The far-field term, if any.
     pub far: Option<FarTerm>,
@@ -98,11 +110,12 @@ pub struct Options {
 impl Options {
     /// The technique as `--technique` names it.
     pub fn technique_name(&self) -> String {
-        if self.default_technique {
-            return DEFAULT_TECHNIQUE.into();
-        }
         let far = self.far.map(FarTerm::name);
         match (self.technique, far) {
+            _ if self.default_technique => match far {
+                Some(far) => format!("{DEFAULT_TECHNIQUE}+{far}"),
+                None => DEFAULT_TECHNIQUE.into(),
+            },
             (AoTechnique::Off, Some(far)) => far.into(),
             (technique, Some(far)) => format!("{}+{far}", technique.name()),
             (technique, None) => technique.name().into(),
@@ -145,9 +158,10 @@ impl Options {
                         }
                         return Ok(None);
                     }
-                    default_technique = name == DEFAULT_TECHNIQUE;
-                    if default_technique {
-                        technique = Some((AoTechnique::default(), None));
+                    let default_far = parse_default(&name);
+                    default_technique = default_far.is_some();
+                    if let Some(far) = default_far {
+                        technique = Some((AoTechnique::default(), far));
                         continue;
                     }
                     technique = Some(parse_technique(&name).ok_or(format!(

@@ -89,6 +89,9 @@ fn lists_its_techniques() {
         "near-field+fields",
         "voxels",
         "near-field+voxels",
+        "default+spheres",
+        "default+fields",
+        "default+voxels",
     ] {
         assert!(
             text.lines().any(|l| l == name),
@@ -530,9 +533,9 @@ fn captures_the_generated_scene_close_to_ground_truth() {
 
 /// The far-field techniques as scripts call them: every mesh of the scene an occluder (proxies,
 /// fields baked on load, one voxel volume over what the view needs), joined to the near field
-/// with the default blend. Against ground truth at the capture's radius: never worse than the near
-/// field alone at 0.75 m, and clearly better at 2 m, where the near field's samples stand for
-/// large patches. The paper's options (`--far-blend add`, `--voxel-falloff wendland`) stay
+/// and to the default (`default+TERM`) with the default blend. Against ground truth at the
+/// capture's radius: better than either alone at 0.75 m, and far better at 2 m, where the near
+/// field's samples stand for large patches and the ray march's reach ends at the screen's edge. The paper's options (`--far-blend add`, `--voxel-falloff wendland`) stay
 /// available and do worse.
 #[test]
 fn captures_the_far_field_of_the_generated_scene() {
@@ -601,18 +604,26 @@ fn captures_the_far_field_of_the_generated_scene() {
                 "  {term}: alone {alone:.4}, near-field+{term} {joined:.4}, with --far-blend add \
                  {added:.4}"
             );
-            if radius < 1.0 {
-                assert!(
-                    joined <= near + 0.005,
-                    "{term} at {radius} m: {joined} vs {near}"
-                );
-            } else {
-                assert!(
-                    joined <= 0.85 * near,
-                    "{term} at {radius} m: {joined} vs {near}"
-                );
-            }
+            // Measured: 0.60–0.64 × the near field's RMSE at 0.75 m, 0.24–0.28 × at 2 m.
+            let bound = if radius < 1.0 { 0.7 } else { 0.32 };
+            assert!(
+                joined <= bound * near,
+                "{term} at {radius} m: {joined} vs {near}"
+            );
             assert!(added > joined, "adding counts in-view occluders twice");
+        }
+        // What `DynamicAo::default()` runs (the accumulated ray march) with each term joined.
+        let default = error(&capture("default", radius, &[]));
+        println!("ao_capture, R = {radius} m: default RMSE {default:.4}");
+        for term in ["spheres", "fields", "voxels"] {
+            let joined = error(&capture(&format!("default+{term}"), radius, &[]));
+            println!("  default+{term} {joined:.4}");
+            // Measured: 0.89–0.94 × the default's RMSE at 0.75 m, 0.35–0.37 × at 2 m.
+            let bound = if radius < 1.0 { 0.97 } else { 0.4 };
+            assert!(
+                joined <= bound * default,
+                "default+{term} at {radius} m: {joined} vs {default}"
+            );
         }
         if radius > 1.0 {
             let wendland = error(&capture("voxels", radius, &["--voxel-falloff", "wendland"]));
