@@ -70,6 +70,11 @@ use options::{FarTerm, Options};
 /// come back a few frames late).
 const TIMING_WARMUP_FRAMES: u32 = 8;
 
+/// Frames after the scene is ready by which the plugin has looked at every `AoField` occluder:
+/// from then on one with neither an active nor a pending field casts none (its bake failed, and
+/// the plugin said why), and the capture does not wait for it.
+const FIELD_RESOLVE_FRAMES: u32 = 4;
+
 /// Frames a scene may take to load before the run gives up.
 const LOAD_TIMEOUT_FRAMES: u32 = 2000;
 /// How long the AO fields of `--technique fields` may take to bake. A bake's time grows with the
@@ -131,7 +136,13 @@ fn main() {
         started: Instant::now(),
     })
     .add_systems(Startup, load_scene)
-    .add_systems(Update, (place_volume, drive).chain());
+    .add_systems(Update, (place_volume, drive).chain())
+    .add_systems(
+        PostUpdate,
+        undrawable::neutralize_unplaceable_cameras
+            .after(TransformSystems::Propagate)
+            .before(bevy::camera::visibility::VisibilitySystems::UpdateFrusta),
+    );
     if timings {
         app.add_plugins(RenderDiagnosticsPlugin);
     }
@@ -194,6 +205,7 @@ fn scene_ready(
     mut capture: ResMut<Capture>,
     children: Query<&Children>,
     cameras: Query<Option<&Projection>, With<Camera3d>>,
+    transforms: Query<(&Transform, Option<&ChildOf>)>,
     meshes: Query<(
         &Mesh3d,
         Option<&Name>,
@@ -220,6 +232,14 @@ fn scene_ready(
         capture.failure = Some(format!("{} has no camera", capture.options.scene.display()));
         return;
     };
+    if undrawable::unplaceable(camera, &transforms) {
+        capture.failure = Some(format!(
+            "{}: the first camera's node has a zero scale or a value that is not finite in its \
+             transform (or in an ancestor's), so it has no view direction",
+            capture.options.scene.display()
+        ));
+        return;
+    }
     undrawable::leave_out_undrawable(
         &mut commands,
         ready.entity,
@@ -428,11 +448,15 @@ fn drive(
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
+    let resolving = capture.frames < capture.stage_start + FIELD_RESOLVE_FRAMES;
+    let fields_baking = fields
+        .iter()
+        .any(|(active, pending)| pending || (!active && resolving));
     // Bevy's SSAO stands in while a new camera's passes start: those frames do not count.
     let ready = capture.stage != Stage::Loading
         && capture.frames >= capture.stage_start + TIMING_WARMUP_FRAMES
         && !(capture.options.far == Some(FarTerm::Voxels) && capture.volume.is_none())
-        && !fields.iter().any(|(active, pending)| !active || pending);
+        && !fields_baking;
     if !ready && let Some(store) = diagnostics.as_deref_mut() {
         timings::forget(store);
     }
@@ -477,7 +501,7 @@ fn drive(
                 exit.write(AppExit::error());
             }
         }
-        Stage::Rendering { .. } if fields.iter().any(|(active, pending)| !active || pending) => {
+        Stage::Rendering { .. } if fields_baking => {
             // Fields still baking: the capture waits for them, within the bake time limit.
             if capture.started.elapsed() > BAKE_TIMEOUT {
                 eprintln!(

@@ -4,7 +4,14 @@
 //! mesh has no usable `JOINTS_0` or `WEIGHTS_0` fails it in the skinned draw. Either ends the app
 //! with no image. The capture leaves such meshes out, or draws such a node unskinned in its rest
 //! pose, with a warning naming it, and renders the rest.
+//!
+//! Cameras Bevy cannot place: a camera node whose transform, or an ancestor's, has a zero scale
+//! or a value that is not finite has no view direction, and Bevy's frustum update panics on it
+//! (in builds with debug assertions; in others it renders a view of nothing). The capture gives
+//! such cameras a neutral place before Bevy reads it and, where it is the one to render through,
+//! says why in one line.
 
+use bevy::math::Affine3A;
 use bevy::mesh::VertexAttributeValues;
 use bevy::mesh::skinning::SkinnedMesh;
 use bevy::prelude::*;
@@ -62,6 +69,36 @@ pub fn leave_out_undrawable(
         } else if let Some(why) = why_unskinnable(mesh).filter(|_| skinned) {
             warn!("mesh {name} is drawn unskinned, in its rest pose: {why}");
             commands.entity(entity).remove::<SkinnedMesh>();
+        }
+    }
+}
+
+/// Whether the node `entity` lies in the world with no view direction: its transform composed
+/// with its ancestors' has a zero-size or non-finite linear part.
+pub fn unplaceable(entity: Entity, transforms: &Query<(&Transform, Option<&ChildOf>)>) -> bool {
+    let mut world_from_node = Affine3A::IDENTITY;
+    let mut node = Some(entity);
+    while let Some(current) = node {
+        let Ok((transform, parent)) = transforms.get(current) else {
+            break;
+        };
+        world_from_node = transform.compute_affine() * world_from_node;
+        node = parent.map(ChildOf::parent);
+    }
+    !(world_from_node.is_finite() && world_from_node.matrix3.determinant().abs() > 1e-12)
+}
+
+/// Gives every camera whose world transform has no view direction (a zero scale, or a value that
+/// is not finite) the identity instead, before Bevy's frustum update reads it. Runs in
+/// `PostUpdate`, between transform propagation and the frustum update: the scene's cameras are
+/// spawned a frame before the capture looks at the scene, and Bevy places them in between.
+pub fn neutralize_unplaceable_cameras(
+    mut cameras: Query<&mut GlobalTransform, (With<Camera>, Changed<GlobalTransform>)>,
+) {
+    for mut transform in &mut cameras {
+        let affine = transform.affine();
+        if !(affine.is_finite() && affine.matrix3.determinant().abs() > 1e-12) {
+            *transform = GlobalTransform::IDENTITY;
         }
     }
 }

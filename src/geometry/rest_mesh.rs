@@ -3,10 +3,12 @@
 use bevy::math::Vec3;
 use bevy::mesh::{Mesh, PrimitiveTopology, VertexAttributeValues};
 
+use super::triangles::triangle_corners;
+
 /// Why a mesh cannot carry spheres.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RestMeshError {
-    /// Only triangle lists are clustered.
+    /// Only triangles (lists and strips) are clustered.
     NotTriangles(PrimitiveTopology),
     /// The mesh has no `Float32x3` positions.
     NoPositions,
@@ -23,7 +25,7 @@ impl std::fmt::Display for RestMeshError {
             Self::NotTriangles(topology) => {
                 write!(
                     f,
-                    "its topology is {topology:?}; only triangle lists are supported"
+                    "its topology is {topology:?}; only triangle lists and strips are supported"
                 )
             }
             Self::NoPositions => write!(f, "it has no Float32x3 vertex positions"),
@@ -72,9 +74,6 @@ impl RestMesh {
     /// Copies what sphere fitting needs out of `mesh`.
     pub fn from_mesh(mesh: &Mesh) -> Result<Self, RestMeshError> {
         let topology = mesh.primitive_topology();
-        if topology != PrimitiveTopology::TriangleList {
-            return Err(RestMeshError::NotTriangles(topology));
-        }
         let positions = match mesh.try_attribute_option(Mesh::ATTRIBUTE_POSITION) {
             Err(_) => return Err(RestMeshError::NotInMainWorld),
             Ok(Some(VertexAttributeValues::Float32x3(p))) => p,
@@ -86,6 +85,8 @@ impl RestMesh {
             Ok(Some(indices)) => indices.iter().collect(),
             Ok(None) => (0..positions.len()).collect(),
         };
+        let indices =
+            triangle_corners(topology, indices).ok_or(RestMeshError::NotTriangles(topology))?;
         let normals = match mesh.try_attribute_option(Mesh::ATTRIBUTE_NORMAL) {
             Ok(Some(VertexAttributeValues::Float32x3(n))) if n.len() == positions.len() => Some(
                 n.iter()

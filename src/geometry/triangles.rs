@@ -39,19 +39,40 @@ pub fn triangle_bounds(triangles: &[Triangle]) -> (Vec3, Vec3) {
         })
 }
 
+/// The corners of a mesh's triangles, three vertex indices per triangle, from its topology and
+/// its index buffer (or `0..n` without one): a triangle list as it is, a triangle strip unrolled
+/// with every second triangle's first two corners swapped, as the rasterizer winds them. `None`
+/// for points and lines, which have no triangles.
+pub fn triangle_corners(topology: PrimitiveTopology, indices: Vec<usize>) -> Option<Vec<usize>> {
+    match topology {
+        PrimitiveTopology::TriangleList => Some(indices),
+        PrimitiveTopology::TriangleStrip => Some(
+            indices
+                .windows(3)
+                .enumerate()
+                .flat_map(|(i, w)| {
+                    if i % 2 == 0 {
+                        [w[0], w[1], w[2]]
+                    } else {
+                        [w[1], w[0], w[2]]
+                    }
+                })
+                .collect(),
+        ),
+        _ => None,
+    }
+}
+
 impl TriangleScene {
     /// The axis-aligned bounds (min, max) of the triangles kept; (+∞, −∞) when there are none.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         triangle_bounds(&self.triangles)
     }
 
-    /// Adds the triangles of `mesh` placed by `world_from_local`. Meshes that are not
-    /// triangle lists, lack positions or keep their data only in the render world add nothing; degenerate or non-finite triangles are
-    /// counted in [`TriangleScene::skipped`].
+    /// Adds the triangles of `mesh` placed by `world_from_local`. Meshes of points or lines, and
+    /// meshes that lack positions or keep their data only in the render world, add nothing;
+    /// degenerate or non-finite triangles are counted in [`TriangleScene::skipped`].
     pub fn add_mesh(&mut self, mesh: &Mesh, world_from_local: Affine3A) {
-        if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
-            return;
-        }
         // The `try_` accessors: a mesh whose data lives only in the render world makes the
         // plain ones panic.
         let Ok(Some(VertexAttributeValues::Float32x3(positions))) =
@@ -72,7 +93,10 @@ impl TriangleScene {
             Ok(Some(indices)) => indices.iter().collect(),
             _ => (0..positions.len()).collect(),
         };
-        for tri in indices.chunks_exact(3) {
+        let Some(corners) = triangle_corners(mesh.primitive_topology(), indices) else {
+            return;
+        };
+        for tri in corners.chunks_exact(3) {
             if tri.iter().any(|&i| i >= positions.len()) {
                 self.skipped += 1;
                 continue;
@@ -91,6 +115,63 @@ impl TriangleScene {
                 continue;
             }
             self.triangles.push(triangle);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bevy::asset::RenderAssetUsages;
+    use bevy::mesh::Indices;
+
+    fn quad(topology: PrimitiveTopology, indices: Vec<u32>) -> Mesh {
+        Mesh::new(topology, RenderAssetUsages::default())
+            .with_inserted_attribute(
+                Mesh::ATTRIBUTE_POSITION,
+                vec![
+                    [0.0f32, 0.0, 0.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [1.0, 1.0, 0.0],
+                ],
+            )
+            .with_inserted_indices(Indices::U32(indices))
+    }
+
+    #[test]
+    fn a_strip_gives_the_triangles_of_the_same_list_wound_alike() {
+        let mut list = TriangleScene::default();
+        list.add_mesh(
+            &quad(PrimitiveTopology::TriangleList, vec![0, 1, 2, 2, 1, 3]),
+            Affine3A::IDENTITY,
+        );
+        let mut strip = TriangleScene::default();
+        strip.add_mesh(
+            &quad(PrimitiveTopology::TriangleStrip, vec![0, 1, 2, 3]),
+            Affine3A::IDENTITY,
+        );
+        assert_eq!(strip.triangles.len(), 2);
+        let rest = crate::geometry::rest_mesh::RestMesh::from_mesh(&quad(
+            PrimitiveTopology::TriangleStrip,
+            vec![0, 1, 2, 3],
+        ))
+        .expect("a strip is triangles");
+        assert_eq!(rest.triangles, vec![[0, 1, 2], [2, 1, 3]]);
+        for (a, b) in list.triangles.iter().zip(&strip.triangles) {
+            assert_eq!(a.vertices, b.vertices);
+            // Both face +z, as the list winds them (counter-clockwise seen from the front).
+            assert!(b.face_normal().z > 0.0);
+        }
+    }
+
+    #[test]
+    fn points_and_lines_have_no_triangles() {
+        for topology in [PrimitiveTopology::PointList, PrimitiveTopology::LineList] {
+            let mut scene = TriangleScene::default();
+            scene.add_mesh(&quad(topology, vec![0, 1, 2, 3]), Affine3A::IDENTITY);
+            assert!(scene.triangles.is_empty(), "{topology:?}");
+            assert_eq!(triangle_corners(topology, vec![0, 1, 2]), None);
         }
     }
 }

@@ -147,6 +147,20 @@ fn bad_input_gives_a_one_line_error() {
         }),
     )
     .unwrap();
+    // A camera with no view direction: Bevy's frustum update panics on it (with debug
+    // assertions), or renders a view of nothing.
+    let flat_camera = dir.join("flat_camera.glb");
+    std::fs::write(
+        &flat_camera,
+        edit_glb(&scene_bytes(), |json| {
+            for node in json["nodes"].as_array_mut().unwrap() {
+                if node.get("camera").is_some() {
+                    node["scale"] = serde_json::json!([0.0, 0.0, 0.0]);
+                }
+            }
+        }),
+    )
+    .unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
         (base(&["--scene", "/nonexistent/scene.glb"]), "not found"),
         (
@@ -213,6 +227,10 @@ fn bad_input_gives_a_one_line_error() {
             base(&["--scene", short_stride.to_str().unwrap()]),
             "reads elements of 12 bytes through buffer view 0, whose stride is 4 bytes",
         ),
+        (
+            base(&["--scene", flat_camera.to_str().unwrap()]),
+            "the first camera's node has a zero scale",
+        ),
     ];
     for (args, expected) in cases {
         let out = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
@@ -266,6 +284,11 @@ fn edit_glb(glb: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
 
 /// A 64 × 48 near-field capture of `scene` into `out_ao`, which must succeed; its stderr.
 fn capture_near_field(scene: &Path, out_ao: &Path) -> String {
+    capture_small(scene, out_ao, "near-field")
+}
+
+/// A 64 × 48 capture of `scene` with `technique` into `out_ao`, which must succeed; its stderr.
+fn capture_small(scene: &Path, out_ao: &Path, technique: &str) -> String {
     let out = run(&[
         "--scene",
         scene.to_str().unwrap(),
@@ -276,7 +299,7 @@ fn capture_near_field(scene: &Path, out_ao: &Path) -> String {
         "--radius",
         "0.75",
         "--technique",
-        "near-field",
+        technique,
         "--out-ao",
         out_ao.to_str().unwrap(),
     ]);
@@ -336,6 +359,59 @@ fn a_mesh_without_readable_positions_is_left_out_with_a_warning() {
     assert!(
         error < 1e-4,
         "the rest of the scene renders as without the broken mesh: RMSE {error}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A mesh of lines (or points) has no triangles to bake an AO field from: `--technique fields`
+/// says so once for it and captures the rest, instead of waiting for a field that never comes
+/// (it waited out its 15-minute bake limit and failed).
+#[test]
+fn a_mesh_without_triangles_does_not_hold_up_a_fields_capture() {
+    let dir = temp_dir("capture_fields_without_triangles");
+    let lines = dir.join("lines.glb");
+    // Mesh 1 is the cube.
+    std::fs::write(
+        &lines,
+        edit_glb(&scene_bytes(), |json| {
+            json["meshes"][1]["primitives"][0]["mode"] = 1.into();
+        }),
+    )
+    .unwrap();
+    let without = dir.join("without.glb");
+    let (meshes, nodes) = gltf_scene::cube_on_plane();
+    let nodes: Vec<_> = nodes
+        .into_iter()
+        .filter(|n| !matches!(n.kind, NodeKind::Mesh(1)))
+        .collect();
+    std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
+    let log = capture_small(&lines, &dir.join("lines.png"), "fields");
+    assert!(!log.contains("panicked"), "nothing may panic:\n{log}");
+    let warnings: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains("casts no field: the object has no usable triangle"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "one warning, for the cube:\n{log}");
+    capture_small(&without, &dir.join("without.png"), "fields");
+    let read = |name: &str| read_visibility_png(&dir.join(name)).expect("a PNG").2;
+    let (with_lines, expected) = (read("lines.png"), read("without.png"));
+    let darkest = expected.iter().copied().fold(1.0f32, f32::min);
+    assert!(
+        darkest < 0.9,
+        "the pillar's field occludes the floor: darkest {darkest}"
+    );
+    // The cube's edges, drawn as lines, are the only pixels that may differ (measured: 43 of
+    // 3072).
+    let differing = with_lines
+        .iter()
+        .zip(&expected)
+        .filter(|(a, b)| (*a - *b).abs() > 0.01)
+        .count();
+    println!("pixels that differ from the scene without the cube: {differing}");
+    assert!(
+        differing * 40 < expected.len(),
+        "{differing} of {} pixels differ from the scene without the cube",
+        expected.len()
     );
     std::fs::remove_dir_all(&dir).ok();
 }
