@@ -6,11 +6,13 @@
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--half-res] [--far-blend count-once|add|max] [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
-//!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png]
+//!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
 //! ```
 //!
 //! `--out-color` writes the lit image (ambient light as most of the light, so the AO shows);
-//! `--compare` writes it beside Bevy's SSAO and no AO (`compare.rs`).
+//! `--compare` writes it beside Bevy's SSAO and no AO (`compare.rs`); `--out-truth` writes the
+//! CPU ray tracer's ground truth at the same view and prints the capture's RMSE against it
+//! (`truth.rs`).
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
 //! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
@@ -39,6 +41,7 @@ mod far_terms;
 mod options;
 mod preflight;
 mod timings;
+mod truth;
 mod undrawable;
 
 use std::path::PathBuf;
@@ -134,9 +137,10 @@ fn main() {
         counting: false,
         placing: None,
         started: Instant::now(),
+        truth_line: None,
     })
     .add_systems(Startup, load_scene)
-    .add_systems(Update, (place_volume, drive).chain())
+    .add_systems(Update, (place_volume, write_truth, drive).chain())
     .add_systems(
         PostUpdate,
         undrawable::neutralize_unplaceable_cameras
@@ -186,6 +190,9 @@ struct Capture {
     placing: Option<Arc<Mutex<Option<Vec<u8>>>>>,
     /// When the run began.
     started: Instant,
+    /// `--out-truth`: the line that says how far the capture lies from ground truth, once
+    /// traced and written.
+    truth_line: Option<String>,
 }
 
 fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
@@ -344,6 +351,66 @@ fn scene_ready(
     capture.stage_start = capture.frames;
 }
 
+/// The scene's root and every entity below it.
+fn scene_entities(world: &World, root: Entity) -> Vec<Entity> {
+    let mut below = vec![root];
+    let mut i = 0;
+    while i < below.len() {
+        if let Some(children) = world.get::<Children>(below[i]) {
+            below.extend(children.iter());
+        }
+        i += 1;
+    }
+    below
+}
+
+/// The view and projection of the camera the capture renders through.
+fn capture_view(world: &mut World) -> Option<ViewMatrices> {
+    world
+        .query_filtered::<(&GlobalTransform, &Camera), With<AoReadback>>()
+        .iter(world)
+        .next()
+        .map(|(transform, camera)| {
+            ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
+        })
+}
+
+/// `--out-truth`: once the capture is read, traces the posed scene through its camera on the CPU
+/// and writes the result beside it (`truth.rs`).
+fn write_truth(world: &mut World) {
+    let capture = world.resource::<Capture>();
+    let (Some(out), Some(captured), None, Some(root)) = (
+        capture.options.out_truth.clone(),
+        capture.visibility.clone(),
+        capture.truth_line.as_ref(),
+        capture.root,
+    ) else {
+        return;
+    };
+    let (width, height) = (capture.options.width, capture.options.height);
+    let radius = capture.options.radius;
+    let below = scene_entities(world, root);
+    let scene = posed_triangles_of(world, |e| below.contains(&e));
+    let Some(view) = capture_view(world) else {
+        return;
+    };
+    let bvh = Bvh::new(scene.triangles);
+    let truth = truth::trace(&bvh, &view, (width, height), radius, &captured);
+    let mut capture = world.resource_mut::<Capture>();
+    if let Err(err) = write_visibility_png(&out, width, height, &truth.visibility) {
+        capture.failure = Some(format!("cannot write {}: {err}", out.display()));
+        return;
+    }
+    capture.truth_line = Some(format!(
+        "ground truth: {} (CPU ray tracer, {} rays per pixel, R = {radius}); RMSE of the capture \
+         {:.4} over the {} pixels that show geometry",
+        out.display(),
+        truth::RAYS_PER_PIXEL,
+        truth.rmse,
+        truth.pixels
+    ));
+}
+
 /// Frames rendered before the view's surfaces are read to place the voxel volume.
 const FRAMES_BEFORE_PLACING: u32 = 3;
 
@@ -387,27 +454,14 @@ fn place_volume(world: &mut World) {
         .chunks_exact(4)
         .map(|c| NdTexel::from_rgba([c[0], c[1], c[2], c[3]]))
         .collect();
-    let mut below = vec![root];
-    let mut i = 0;
-    while i < below.len() {
-        if let Some(children) = world.get::<Children>(below[i]) {
-            below.extend(children.iter());
-        }
-        i += 1;
-    }
+    let below = scene_entities(world, root);
     let scene = posed_triangles_of(world, |e| below.contains(&e));
     let (lo, hi) = scene.bounds();
     if !lo.is_finite() || !hi.is_finite() {
         world.resource_mut::<Capture>().failure = Some("the scene has no triangles".into());
         return;
     }
-    let view = world
-        .query_filtered::<(&GlobalTransform, &Camera), With<AoReadback>>()
-        .iter(world)
-        .next()
-        .map(|(transform, camera)| {
-            ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
-        });
+    let view = capture_view(world);
     let bvh = Bvh::new(scene.triangles);
     let region = view
         .and_then(|view| far_terms::occluder_bounds(&bvh, &texels, width, height, &view, radius))
@@ -537,7 +591,8 @@ fn drive(
             let color_ready = compared
                 && (capture.options.out_color.is_none()
                     || capture.color_done
-                    || capture.compare.is_some());
+                    || capture.compare.is_some())
+                && (capture.options.out_truth.is_none() || capture.truth_line.is_some());
             if let (Some(visibility), true) = (capture.visibility.as_ref(), color_ready) {
                 let options = &capture.options;
                 if let Err(err) =
@@ -558,6 +613,9 @@ fn drive(
                     options.radius,
                     options.out_ao.display()
                 );
+                if let Some(line) = &capture.truth_line {
+                    println!("{line}");
+                }
                 if let (true, Some(store)) = (options.timings, diagnostics.as_deref()) {
                     let bevy_ssao = options.technique == AoTechnique::BevySsao;
                     println!("{}", timings::summary(store, bevy_ssao));

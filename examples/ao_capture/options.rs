@@ -11,7 +11,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--half-res] [--far-blend count-once|add|max] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -103,6 +103,8 @@ pub struct Options {
     pub msaa: u32,
     pub out_ao: PathBuf,
     pub out_color: Option<PathBuf>,
+    /// Where the CPU ray tracer's visibility at the same view goes.
+    pub out_truth: Option<PathBuf>,
     /// Where ours, Bevy's SSAO and no AO go, lit, side by side.
     pub compare: Option<PathBuf>,
 }
@@ -133,6 +135,7 @@ impl Options {
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color, mut compare) = (None, None, None);
+        let mut out_truth = None;
         let mut msaa = 1;
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
@@ -226,6 +229,7 @@ impl Options {
                 }
                 "--out-ao" => out_ao = Some(PathBuf::from(value()?)),
                 "--out-color" => out_color = Some(PathBuf::from(value()?)),
+                "--out-truth" => out_truth = Some(PathBuf::from(value()?)),
                 "--compare" => compare = Some(PathBuf::from(value()?)),
                 "--help" | "-h" => {
                     println!("{USAGE}");
@@ -293,6 +297,7 @@ impl Options {
             time,
             out_ao: out_ao.ok_or_else(|| missing("--out-ao"))?,
             out_color,
+            out_truth,
             compare,
         }))
     }

@@ -503,6 +503,82 @@ fn generated_scene(time: f32, width: u32, height: u32) -> (Bvh, ViewMatrices) {
     )
 }
 
+/// `--out-truth` writes the ground truth the tests hold captures against (the same tracer on
+/// the same posed scene and view), and prints the capture's RMSE against it over the pixels that
+/// show geometry.
+#[test]
+fn out_truth_writes_the_tests_ground_truth() {
+    let dir = temp_dir("capture_truth");
+    let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
+    let (out_ao, out_truth) = (dir.join("ao.png"), dir.join("truth.png"));
+    let out = run(&[
+        "--scene",
+        scene_path().to_str().unwrap(),
+        "--width",
+        &w.to_string(),
+        "--height",
+        &h.to_string(),
+        "--radius",
+        &radius.to_string(),
+        "--technique",
+        "near-field",
+        "--time",
+        &time.to_string(),
+        "--out-ao",
+        out_ao.to_str().unwrap(),
+        "--out-truth",
+        out_truth.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "ao_capture failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (bvh, view) = generated_scene(time, w, h);
+    let expected = ground_truth_visibility(
+        &bvh,
+        &view,
+        &GroundTruthSettings {
+            width: w,
+            height: h,
+            radius,
+            rays_per_pixel: 256,
+        },
+    );
+    let (tw, th, truth) = read_visibility_png(&out_truth).expect("a 16-bit grayscale PNG");
+    assert_eq!((tw, th), (w, h));
+    let difference = rmse(&truth, &expected, None);
+    println!("--out-truth against the tests' ground truth: RMSE {difference:.5}");
+    // Measured: 0.00000 (16-bit quantization aside).
+    assert!(difference < 0.001, "RMSE {difference}");
+    let ours = read_visibility_png(&out_ao).expect("the capture's PNG").2;
+    let geometry: Vec<bool> = (0..w * h)
+        .map(|i| {
+            let (origin, dir) =
+                bevy_dynamic_ao::reference::ground_truth::camera_ray(&view, i % w, i / w, w, h);
+            bvh.closest_hit(origin, dir, 0.0, f32::INFINITY).is_some()
+        })
+        .collect();
+    let error = rmse(&ours, &expected, Some(&geometry));
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("ground truth: "))
+        .unwrap_or_else(|| panic!("no ground-truth line in:\n{stdout}"));
+    let printed: f32 = line
+        .split("RMSE of the capture ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|number| number.parse().ok())
+        .unwrap_or_else(|| panic!("no RMSE in '{line}'"));
+    println!("{line}");
+    assert!(
+        (printed - error).abs() < 0.001,
+        "printed RMSE {printed} against {error} over the geometry pixels"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn captures_the_generated_scene_close_to_ground_truth() {
     let dir = temp_dir("capture");

@@ -1,0 +1,55 @@
+//! `--out-truth`: what the capture should show, from the CPU ray tracer the crate's tests hold
+//! every technique against (`reference::ground_truth`, eq. 1 of the papers): at each pixel
+//! centre, the share of 256 cosine-weighted rays from the surface the camera sees that meet
+//! nothing within the radius. It traces the scene as it stands when the capture is read (posed,
+//! skinned and morphed on the CPU), through the capture's camera, and is written as the capture
+//! is (16-bit linear visibility, 65535 where no geometry is).
+
+use bevy_dynamic_ao::geometry::bvh::Bvh;
+use bevy_dynamic_ao::reference::ground_truth::{
+    GroundTruthSettings, camera_ray, ground_truth_visibility,
+};
+use bevy_dynamic_ao::reference::metrics::rmse;
+use bevy_dynamic_ao::reference::nd_buffer::ViewMatrices;
+
+/// Hemisphere rays per pixel, as the crate's ground-truth tests trace.
+pub const RAYS_PER_PIXEL: u32 = 256;
+
+/// The ground truth of one capture and how far the capture lies from it.
+pub struct Truth {
+    /// Visibility per pixel, row-major.
+    pub visibility: Vec<f32>,
+    /// RMSE of the capture's visibility over the pixels that show geometry.
+    pub rmse: f32,
+    /// How many pixels show geometry.
+    pub pixels: usize,
+}
+
+/// Traces `bvh` through `view` at `width × height` and holds `captured` against it.
+pub fn trace(
+    bvh: &Bvh,
+    view: &ViewMatrices,
+    (width, height): (u32, u32),
+    radius: f32,
+    captured: &[f32],
+) -> Truth {
+    let settings = GroundTruthSettings {
+        width,
+        height,
+        radius,
+        rays_per_pixel: RAYS_PER_PIXEL,
+    };
+    let visibility = ground_truth_visibility(bvh, view, &settings);
+    let mask: Vec<bool> = (0..width * height)
+        .map(|i| {
+            let (origin, direction) = camera_ray(view, i % width, i / width, width, height);
+            bvh.closest_hit(origin, direction, 0.0, f32::INFINITY)
+                .is_some()
+        })
+        .collect();
+    Truth {
+        rmse: rmse(captured, &visibility, Some(&mask)),
+        pixels: mask.iter().filter(|m| **m).count(),
+        visibility,
+    }
+}
