@@ -9,9 +9,10 @@
 // parts of one character stand one behind another as a receiver sees them (an arm before its
 // torso), and the product counts the hidden part too; their union is taken halfway between the
 // largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
-// rule measured against ray-traced proxies (see `spheres`). Rigid meshes' proxies (walls, floors,
-// props) multiply: inside a room the walls lie in different directions and hide nothing of one
-// another. Counted once: within the near field's reach the larger of the near field and the red
+// rule measured against ray-traced proxies (see `spheres`); a closed rigid mesh with several
+// proxies (a ring) joins them the same way. Other proxies (walls, floors, boxy props) multiply:
+// inside a room the walls lie in different directions and hide nothing of one another. Counted
+// once: within the near field's reach the larger of the near field and the red
 // channel counts, because what the ND-buffer misses is most often the hidden side of what it
 // shows (the two cover the same directions); beyond it, the green channel joins as an
 // independent occluder. `Add` adds the near and far terms and clamps

@@ -131,9 +131,11 @@ pub struct OccluderSpheres {
     pub spheres: Vec<OccluderSphere>,
     /// The reach of the [`SphereOccluder`] this mesh belongs to.
     pub reach: ProxyReach,
-    /// The mesh is skinned: its proxies (one or more per bone) stand one behind another as a
-    /// receiver sees them (an arm before the torso), and compose takes their union rather than
-    /// their product. The proxies of rigid meshes join as independent occluders.
+    /// The mesh is skinned, or encloses a volume with more than one proxy: its proxies stand one
+    /// behind another as a receiver sees them (an arm before the torso, a ring's near side
+    /// before its far side), and compose takes their union rather than their product. The
+    /// proxies of other meshes (one box each, or open meshes such as a room's walls, which
+    /// surround a receiver from different directions) join as independent occluders.
     pub articulated: bool,
 }
 

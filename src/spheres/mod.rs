@@ -33,8 +33,11 @@
 //!      character's proxies stand one behind another (an arm before the torso), so their product
 //!      counts hidden parts too; compose takes their union halfway between the largest proxy and
 //!      the product (measured against the proxies themselves ray-traced, on the floor around
-//!      characters: within 15 % where the product was 40–80 % over), and joins every other
-//!      proxy as an independent occluder ([`OccluderSpheres::articulated`]). Walls, floors and
+//!      characters: within 15 % where the product was 40–80 % over). So it does for a rigid mesh
+//!      that encloses a volume and got several boxes (a ring's near and far sides: with the
+//!      product, a bumpy ring on a floor at R = 2 m read 0.100 joined to the default, 0.068
+//!      without the far field, 0.048 with the union), and joins every other proxy as an
+//!      independent occluder ([`OccluderSpheres::articulated`]). Walls, floors and
 //!      props lie in different directions and hide nothing of one another: the union over every
 //!      proxy undercounted a room's walls (the Cornell box at 2 m: 0.162 RMSE, 0.106 now).
 //!

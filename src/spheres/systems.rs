@@ -19,6 +19,7 @@ use super::component::{OccluderSpheres, ProxyShape, SphereOccluder};
 use super::fit::fit_boxes;
 use super::lloyd::{ClusteredMesh, cluster};
 use super::refit::refit;
+use crate::geometry::closed::is_closed;
 use crate::geometry::deform::{Pose, mesh_morph_weights, skin_joints};
 use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
 
@@ -32,6 +33,9 @@ pub(crate) struct FittedMesh {
     pub clustered: ClusteredMesh,
     /// Vertices that carry surface area: the most clusters this mesh can have.
     pub clusterable_vertices: usize,
+    /// The mesh encloses a volume and has more than one proxy: its proxies stand one behind
+    /// another as a receiver sees them (the near and far sides of a ring), as a character's do.
+    pub solid_parts: bool,
 }
 
 type FitResult = Result<Arc<FittedMesh>, RestMeshError>;
@@ -97,10 +101,17 @@ fn fit(mesh: RestMesh, count: u32, shape: ProxyShape) -> Arc<FittedMesh> {
         ProxyShape::Spheres => cluster(&mesh, count),
     };
     let clusterable_vertices = mesh.areas.iter().filter(|a| **a > 0.0).count();
+    let solid_parts = clustered.spheres.len() > 1
+        && is_closed(
+            mesh.triangles
+                .iter()
+                .map(|t| t.map(|i| mesh.positions[i as usize])),
+        );
     Arc::new(FittedMesh {
         mesh,
         clustered,
         clusterable_vertices,
+        solid_parts,
     })
 }
 
@@ -215,6 +226,7 @@ pub(crate) fn refit_spheres(
         if let Some(fitted) = fitted
             && visibility.is_none_or(|v| v.get())
         {
+            out.articulated |= fitted.solid_parts;
             if occluder.shape == ProxyShape::Spheres
                 && fitted.clusterable_vertices < occluder.count as usize
             {
