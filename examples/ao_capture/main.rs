@@ -66,7 +66,7 @@ use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
-use bevy_dynamic_ao::reference::posed::posed_triangles_of;
+use bevy_dynamic_ao::reference::posed::{descendants, posed_triangles_of};
 use options::{FarTerm, Options};
 
 /// Frames rendered once the scene is ready before `--timings` starts measuring (timestamps
@@ -351,19 +351,6 @@ fn scene_ready(
     capture.stage_start = capture.frames;
 }
 
-/// The scene's root and every entity below it.
-fn scene_entities(world: &World, root: Entity) -> Vec<Entity> {
-    let mut below = vec![root];
-    let mut i = 0;
-    while i < below.len() {
-        if let Some(children) = world.get::<Children>(below[i]) {
-            below.extend(children.iter());
-        }
-        i += 1;
-    }
-    below
-}
-
 /// The view and projection of the camera the capture renders through.
 fn capture_view(world: &mut World) -> Option<ViewMatrices> {
     world
@@ -389,7 +376,7 @@ fn write_truth(world: &mut World) {
     };
     let (width, height) = (capture.options.width, capture.options.height);
     let radius = capture.options.radius;
-    let below = scene_entities(world, root);
+    let below = descendants(world, root);
     let scene = posed_triangles_of(world, |e| below.contains(&e));
     let Some(view) = capture_view(world) else {
         return;
@@ -454,7 +441,7 @@ fn place_volume(world: &mut World) {
         .chunks_exact(4)
         .map(|c| NdTexel::from_rgba([c[0], c[1], c[2], c[3]]))
         .collect();
-    let below = scene_entities(world, root);
+    let below = descendants(world, root);
     let scene = posed_triangles_of(world, |e| below.contains(&e));
     let (lo, hi) = scene.bounds();
     if !lo.is_finite() || !hi.is_finite() {

@@ -7,7 +7,7 @@
 
 use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::reference::ground_truth::{
-    GroundTruthSettings, camera_ray, ground_truth_visibility,
+    GroundTruthSettings, geometry_mask, ground_truth_visibility,
 };
 use bevy_dynamic_ao::reference::metrics::rmse;
 use bevy_dynamic_ao::reference::nd_buffer::ViewMatrices;
@@ -40,13 +40,7 @@ pub fn trace(
         rays_per_pixel: RAYS_PER_PIXEL,
     };
     let visibility = ground_truth_visibility(bvh, view, &settings);
-    let mask: Vec<bool> = (0..width * height)
-        .map(|i| {
-            let (origin, direction) = camera_ray(view, i % width, i / width, width, height);
-            bvh.closest_hit(origin, direction, 0.0, f32::INFINITY)
-                .is_some()
-        })
-        .collect();
+    let mask = geometry_mask(bvh, view, width, height);
     Truth {
         rmse: rmse(captured, &visibility, Some(&mask)),
         pixels: mask.iter().filter(|m| **m).count(),

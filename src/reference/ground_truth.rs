@@ -34,6 +34,18 @@ pub fn camera_ray(view: &ViewMatrices, x: u32, y: u32, width: u32, height: u32) 
     (near, (far - near).normalize())
 }
 
+/// Whether the primary ray of each pixel meets a triangle, row-major: the pixels that show
+/// geometry, over which errors against ground truth are measured.
+pub fn geometry_mask(bvh: &Bvh, view: &ViewMatrices, width: u32, height: u32) -> Vec<bool> {
+    (0..width * height)
+        .map(|i| {
+            let (origin, direction) = camera_ray(view, i % width, i / width, width, height);
+            bvh.closest_hit(origin, direction, 0.0, f32::INFINITY)
+                .is_some()
+        })
+        .collect()
+}
+
 /// Visibility of every pixel, row-major. Uses every available core.
 pub fn ground_truth_visibility(
     bvh: &Bvh,

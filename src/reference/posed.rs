@@ -9,7 +9,7 @@ use bevy::math::{Affine3A, Vec3};
 use bevy::mesh::morph::{MeshMorphWeights, MorphWeights};
 use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::mesh::{Mesh, Mesh3d};
-use bevy::prelude::{Assets, GlobalTransform};
+use bevy::prelude::{Assets, Children, GlobalTransform};
 
 use crate::geometry::deform::{Deformer, Pose};
 use crate::geometry::deform::{mesh_morph_weights, skin_joints};
@@ -29,8 +29,22 @@ type Meshes<'w, 's> = Query<
     ),
 >;
 
+/// Every entity below `root` in the hierarchy, `root` included: a spawned scene's, for
+/// [`posed_triangles_of`].
+pub fn descendants(world: &World, root: Entity) -> Vec<Entity> {
+    let mut out = vec![root];
+    let mut i = 0;
+    while i < out.len() {
+        if let Some(children) = world.get::<Children>(out[i]) {
+            out.extend(children.iter());
+        }
+        i += 1;
+    }
+    out
+}
+
 /// Every visible mesh of `world` as world-space triangles in its current pose (run it after
-/// `PostUpdate`, when transforms have propagated). Meshes that are not triangle lists, or whose
+/// `PostUpdate`, when transforms have propagated). Meshes of points or lines, or whose
 /// data lives only in the render world, add nothing; their count is in
 /// [`TriangleScene::skipped`] together with degenerate triangles.
 pub fn posed_triangles(world: &mut World) -> TriangleScene {

@@ -9,7 +9,7 @@ use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
 use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::reference::{
-    ground_truth::{GroundTruthSettings, ground_truth_visibility},
+    ground_truth::{GroundTruthSettings, geometry_mask, ground_truth_visibility},
     metrics::rmse,
     nd_buffer::ViewMatrices,
     png16::read_visibility_png,
@@ -503,107 +503,39 @@ fn generated_scene(time: f32, width: u32, height: u32) -> (Bvh, ViewMatrices) {
     )
 }
 
-/// `--out-truth` writes the ground truth the tests hold captures against (the same tracer on
-/// the same posed scene and view), and prints the capture's RMSE against it over the pixels that
-/// show geometry.
-#[test]
-fn out_truth_writes_the_tests_ground_truth() {
-    let dir = temp_dir("capture_truth");
-    let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
-    let (out_ao, out_truth) = (dir.join("ao.png"), dir.join("truth.png"));
-    let out = run(&[
-        "--scene",
-        scene_path().to_str().unwrap(),
-        "--width",
-        &w.to_string(),
-        "--height",
-        &h.to_string(),
-        "--radius",
-        &radius.to_string(),
-        "--technique",
-        "near-field",
-        "--time",
-        &time.to_string(),
-        "--out-ao",
-        out_ao.to_str().unwrap(),
-        "--out-truth",
-        out_truth.to_str().unwrap(),
-    ]);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "ao_capture failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let (bvh, view) = generated_scene(time, w, h);
-    let expected = ground_truth_visibility(
-        &bvh,
-        &view,
-        &GroundTruthSettings {
-            width: w,
-            height: h,
-            radius,
-            rays_per_pixel: 256,
-        },
-    );
-    let (tw, th, truth) = read_visibility_png(&out_truth).expect("a 16-bit grayscale PNG");
-    assert_eq!((tw, th), (w, h));
-    let difference = rmse(&truth, &expected, None);
-    println!("--out-truth against the tests' ground truth: RMSE {difference:.5}");
-    // Measured: 0.00000 (16-bit quantization aside).
-    assert!(difference < 0.001, "RMSE {difference}");
-    let ours = read_visibility_png(&out_ao).expect("the capture's PNG").2;
-    let geometry: Vec<bool> = (0..w * h)
-        .map(|i| {
-            let (origin, dir) =
-                bevy_dynamic_ao::reference::ground_truth::camera_ray(&view, i % w, i / w, w, h);
-            bvh.closest_hit(origin, dir, 0.0, f32::INFINITY).is_some()
-        })
-        .collect();
-    let error = rmse(&ours, &expected, Some(&geometry));
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with("ground truth: "))
-        .unwrap_or_else(|| panic!("no ground-truth line in:\n{stdout}"));
-    let printed: f32 = line
-        .split("RMSE of the capture ")
-        .nth(1)
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|number| number.parse().ok())
-        .unwrap_or_else(|| panic!("no RMSE in '{line}'"));
-    println!("{line}");
-    assert!(
-        (printed - error).abs() < 0.001,
-        "printed RMSE {printed} against {error} over the geometry pixels"
-    );
-    std::fs::remove_dir_all(&dir).ok();
-}
-
+/// The near field captured from the generated scene against the CPU ray tracer; `--out-truth`
+/// writes that same ground truth (the tracer on the same posed scene and view) and prints the
+/// capture's RMSE against it over the pixels that show geometry.
 #[test]
 fn captures_the_generated_scene_close_to_ground_truth() {
     let dir = temp_dir("capture");
     let (w, h, radius, time) = (160u32, 120u32, 0.75f32, 1.0f32);
-    let capture = |technique: &str| {
+    let out_truth = dir.join("truth.png");
+    let capture = |technique: &str, extra: &[&str]| {
         let out_ao = dir.join(format!("{technique}.png"));
         let out_color = dir.join(format!("{technique}_color.png"));
-        let out = run(&[
+        let (scene, numbers) = (scene_path(), [w, h].map(|n| n.to_string()));
+        let (radius, time) = (radius.to_string(), time.to_string());
+        let mut args = vec![
             "--scene",
-            scene_path().to_str().unwrap(),
+            scene.to_str().unwrap(),
             "--width",
-            &w.to_string(),
+            &numbers[0],
             "--height",
-            &h.to_string(),
+            &numbers[1],
             "--radius",
-            &radius.to_string(),
+            &radius,
             "--technique",
             technique,
             "--time",
-            &time.to_string(),
+            &time,
             "--out-ao",
             out_ao.to_str().unwrap(),
             "--out-color",
             out_color.to_str().unwrap(),
-        ]);
+        ];
+        args.extend_from_slice(extra);
+        let out = run(&args);
         assert!(
             out.status.success(),
             "ao_capture failed:\n{}",
@@ -612,15 +544,15 @@ fn captures_the_generated_scene_close_to_ground_truth() {
         assert!(out_color.is_file(), "--out-color wrote nothing");
         let (iw, ih, ao) = read_visibility_png(&out_ao).expect("a 16-bit grayscale PNG");
         assert_eq!((iw, ih), (w, h));
-        ao
+        (ao, String::from_utf8_lossy(&out.stdout).into_owned())
     };
-    let none = capture("none");
+    let (none, _) = capture("none", &[]);
     assert!(
         none.iter().all(|v| *v == 1.0),
         "technique none must be all open"
     );
 
-    let ours = capture("near-field");
+    let (ours, stdout) = capture("near-field", &["--out-truth", out_truth.to_str().unwrap()]);
     let (bvh, view) = generated_scene(time, w, h);
     let truth = ground_truth_visibility(
         &bvh,
@@ -632,19 +564,28 @@ fn captures_the_generated_scene_close_to_ground_truth() {
             rays_per_pixel: 256,
         },
     );
+    let written = read_visibility_png(&out_truth)
+        .expect("--out-truth's PNG")
+        .2;
+    let difference = rmse(&written, &truth, None);
+    println!("--out-truth against the tests' ground truth: RMSE {difference:.5}");
+    // Measured: 0.00000 (16-bit quantization aside).
+    assert!(difference < 0.001, "--out-truth: RMSE {difference}");
+    let geometry = geometry_mask(&bvh, &view, w, h);
+    let printed: f32 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("ground truth: "))
+        .and_then(|l| l.split("RMSE of the capture ").nth(1))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|number| number.parse().ok())
+        .unwrap_or_else(|| panic!("no ground-truth RMSE in:\n{stdout}"));
+    let over_geometry = rmse(&ours, &truth, Some(&geometry));
+    assert!(
+        (printed - over_geometry).abs() < 0.001,
+        "printed RMSE {printed} against {over_geometry} over the geometry pixels"
+    );
     // Where ground truth sees no geometry, the capture must say open.
-    let sky: Vec<bool> = (0..truth.len())
-        .map(|i| {
-            let (origin, dir) = bevy_dynamic_ao::reference::ground_truth::camera_ray(
-                &view,
-                (i as u32) % w,
-                (i as u32) / w,
-                w,
-                h,
-            );
-            bvh.closest_hit(origin, dir, 0.0, f32::INFINITY).is_none()
-        })
-        .collect();
+    let sky: Vec<bool> = geometry.iter().map(|g| !g).collect();
     let sky_count = sky.iter().filter(|s| **s).count();
     assert!(
         sky_count > 100,

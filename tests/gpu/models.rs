@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use bevy::gltf::{Gltf, GltfAssetLabel};
 use bevy::prelude::*;
 use bevy::world_serialization::{WorldAsset, WorldAssetRoot};
-use bevy_dynamic_ao::reference::posed::posed_triangles_of;
+use bevy_dynamic_ao::reference::posed::{descendants, posed_triangles_of};
 
 use crate::harness::Gpu;
 
@@ -79,19 +79,6 @@ pub fn load_model(gpu: &mut Gpu, file: &str, animation: Option<usize>, time: f32
         return root;
     }
     panic!("{file} did not load");
-}
-
-/// Every entity below `root`, `root` included.
-pub fn descendants(world: &mut World, root: Entity) -> Vec<Entity> {
-    let mut out = vec![root];
-    let mut i = 0;
-    while i < out.len() {
-        if let Some(children) = world.get::<Children>(out[i]) {
-            out.extend(children.iter());
-        }
-        i += 1;
-    }
-    out
 }
 
 /// World-space bounds of the posed meshes below `root`.
