@@ -80,11 +80,13 @@ impl FieldInstance {
     }
 }
 
-/// Bytes one cell takes on the GPU: three `vec4<f32>`.
-const CELL_BYTES: usize = 3 * 16;
+/// `vec4<f32>` per cell on the GPU (`fields.wgsl` reads them at this stride).
+const CELL_VEC4S: usize = 4;
+/// Bytes one cell takes on the GPU.
+const CELL_BYTES: usize = CELL_VEC4S * 16;
 
 /// Most bytes every field in use may take together: the device's storage binding limit, and at
-/// most 512 MiB (a 256³ field alone takes 805 MB).
+/// most 512 MiB (a 256³ field alone takes 1074 MB).
 fn field_budget(max_storage_binding: u64) -> u64 {
     max_storage_binding.min(512 << 20)
 }
@@ -94,8 +96,9 @@ fn field_budget(max_storage_binding: u64) -> u64 {
 pub(crate) struct FieldBuffers {
     /// Field assets in `cells`, in order, with their first cell.
     layout: Vec<(AssetId<AoFieldData>, u32)>,
-    /// Three vec4 per cell: far occlusion and direction, near occlusion and direction, signed
-    /// distance and mean offset to the near hits.
+    /// Four vec4 per cell: far occlusion and direction, near occlusion and direction, signed
+    /// distance and mean offset to the near hits, the own surface's share beyond the near reach
+    /// and its normal.
     pub(super) cells: RawBufferVec<Vec4>,
     pub(super) instances: RawBufferVec<FieldInstance>,
     /// `cells` changed and must be written again.
@@ -108,7 +111,7 @@ impl Default for FieldBuffers {
     fn default() -> Self {
         // A binding needs a buffer even before the first field exists; nothing reads this cell.
         let mut cells = RawBufferVec::new(BufferUsages::STORAGE);
-        cells.extend([Vec4::ZERO; 3]);
+        cells.extend([Vec4::ZERO; CELL_VEC4S]);
         Self {
             layout: Vec::new(),
             cells,
@@ -182,22 +185,26 @@ pub(crate) fn extract_fields(
         buffers.cells.clear();
         for id in used {
             let field = fields.get(id).expect("checked above");
-            buffers.layout.push((id, buffers.cells.len() as u32 / 3));
-            for ((far, near), distances) in field
+            buffers
+                .layout
+                .push((id, (buffers.cells.len() / CELL_VEC4S) as u32));
+            for (((far, near), distances), own) in field
                 .cells
                 .iter()
                 .zip(&field.near_cells)
                 .zip(&field.distances)
+                .zip(&field.own_surface)
             {
                 buffers.cells.extend([
                     Vec4::from_array(*far),
                     Vec4::from_array(*near),
                     Vec4::from_array(*distances),
+                    Vec4::from_array(*own),
                 ]);
             }
         }
         if buffers.cells.is_empty() {
-            buffers.cells.extend([Vec4::ZERO; 3]);
+            buffers.cells.extend([Vec4::ZERO; CELL_VEC4S]);
         }
         buffers.dirty = true;
     }

@@ -2,7 +2,9 @@
 //! never the shared temporary folder), files written atomically (a new temporary file, then a
 //! rename, so a reader never sees half a file and no symlink is followed), read only when they
 //! are regular files of exactly the size the bake would write, and trusted only when their grid
-//! is the one the mesh and settings would bake.
+//! is the one the mesh and settings would bake. A file's name hashes the mesh, the settings, the
+//! format version and the crate's version; a change to the baker between releases is not in it,
+//! so whoever changes the baker deletes the folder before measuring.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Read, Write};

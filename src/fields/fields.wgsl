@@ -3,8 +3,11 @@
 // the ND-buffer, moves it into the grid and interpolates the stored occlusion a and average
 // occluded direction d trilinearly, from grid points outside the object only (their signed
 // distance is positive), so that a point on a thin object never mixes values from its two sides.
-// The object's own surface gets nothing: the occlusion fades out over the half cell next to it,
-// by the interpolated signed distance; the near field shades that surface. a and d become the
+// The object's own surface gets only what lies beyond the near field's reach: the occlusion fades
+// out over the half cell next to it, by the interpolated signed distance, and the near field
+// shades that surface within its reach; beyond it, the share the grid points next to the surface
+// baked over their nearest surface point's hemisphere fades in, from the points whose surface
+// faces the way the receiver does (so a thin object's two sides stay apart). a and d become the
 // share of ambient light blocked: 2a (occlusion only, §3.2) or the cone of fraction a around d
 // clipped by the receiver's tangent plane (T_clip of §3.3.1, `cap_occlusion`). The field holds
 // them twice, for hits within R and within the near field's reach; under `FarFieldBlend::CountOnce`
@@ -26,7 +29,7 @@ struct FieldInstance {
     grid_from_world: mat4x4<f32>,
     // Mesh-space directions to world space (columns; w unused).
     world_from_mesh: mat3x4<f32>,
-    // Cells per axis, and the first cell in `cells` (each cell is three vec4).
+    // Cells per axis, and the first cell in `cells` (each cell is four vec4).
     resolution: vec3<u32>,
     offset: u32,
     // x: how far from the object's surface its own surface's fade ends, mesh units.
@@ -86,11 +89,17 @@ struct FieldSample {
     near_offset: vec3<f32>,
     // Signed distance to the object's surface, mesh units.
     signed_distance: f32,
+    // On the object's own surface, the share of its hemisphere blocked beyond the near reach.
+    own_surface: f32,
 }
 
+// Own-surface grid points whose surface normal is this close to the receiver's count.
+const SAME_SIDE: f32 = 0.5;
+
 // Trilinear interpolation between cell centres, clamped at the outer cells, over the corners
-// outside the object (the signed distance over all eight).
-fn sample_field(field: FieldInstance, uvw: vec3<f32>) -> FieldSample {
+// outside the object (the signed distance over all eight; the own surface's share over those
+// whose surface faces the way mesh-space normal `n` does).
+fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSample {
     let r = vec3<f32>(field.resolution);
     let g = clamp(uvw * r - 0.5, vec3<f32>(0.0), r - 1.0);
     let i0 = vec3<u32>(floor(g));
@@ -101,15 +110,22 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>) -> FieldSample {
     out.near = vec4<f32>(0.0);
     out.near_offset = vec3<f32>(0.0);
     out.signed_distance = 0.0;
+    out.own_surface = 0.0;
     var outside = 0.0;
+    var facing = 0.0;
     for (var corner = 0u; corner < 8u; corner++) {
         let pick = vec3<bool>((corner & 1u) != 0u, (corner & 2u) != 0u, (corner & 4u) != 0u);
         let c = select(i0, i1, pick);
         let w3 = select(1.0 - f, f, pick);
         let w = w3.x * w3.y * w3.z;
-        let at = 3u * (field.offset + (c.z * field.resolution.y + c.y) * field.resolution.x + c.x);
+        let at = 4u * (field.offset + (c.z * field.resolution.y + c.y) * field.resolution.x + c.x);
         let distances = cells[at + 2u];
         out.signed_distance += w * distances.x;
+        let own = cells[at + 3u];
+        if dot(own.yzw, n) > SAME_SIDE {
+            facing += w;
+            out.own_surface += w * own.x;
+        }
         if distances.x > 0.0 {
             outside += w;
             out.far += w * cells[at];
@@ -121,6 +137,9 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>) -> FieldSample {
         out.far /= outside;
         out.near /= outside;
         out.near_offset /= outside;
+    }
+    if facing > 0.0 {
+        out.own_surface /= facing;
     }
     return out;
 }
@@ -154,8 +173,10 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     if any(uvw < vec3<f32>(0.0)) || any(uvw > vec3<f32>(1.0)) {
         return vec4<f32>(0.0);
     }
-    let s = sample_field(field, uvw);
-    // Nothing on the object's own surface, fading in over the half cell next to it.
+    let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
+    // Normals go to mesh space by the transpose (the inverse of the inverse transpose).
+    let s = sample_field(field, uvw, normalize(normal * m));
+    // Nothing from the field on the object's own surface, fading in over the half cell next to it.
     let fade = smoothstep(0.0, field.params.x, s.signed_distance);
     let all = cone_occlusion(field, s.far.x, s.far.yzw, normal) * fade;
     let near = settings.near_field_radius;
@@ -164,8 +185,8 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     }
     let inner = cone_occlusion(field, s.near.x, s.near.yzw, normal) * fade;
     // The near part's occluders lie about its mean hit point.
-    let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
     let at = p + m * s.near_offset;
     let held = nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, at, 0.1 * near);
-    return vec4<f32>(inner * (1.0 - held), share_beyond(all, inner), 0.0, 0.0);
+    let beyond = min(share_beyond(all, inner) + s.own_surface * (1.0 - fade), 1.0);
+    return vec4<f32>(inner * (1.0 - held), beyond, 0.0, 0.0);
 }

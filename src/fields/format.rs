@@ -5,12 +5,12 @@
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `AOFIELD\0` |
-//! | 4 | version (u32, currently 2) |
+//! | 4 | version (u32, currently 3) |
 //! | 12 | grid resolution x, y, z (u32 each, 2 to [`MAX_RESOLUTION`]) |
 //! | 12 | grid box centre, mesh space (f32 × 3, metres) |
 //! | 12 | grid box half extents e_i (f32 × 3, metres, > 0) |
 //! | 8 | the distances the occlusion counts within: reach, then near reach (f32 × 2, metres, 0 = unlimited) |
-//! | 48 per cell | occlusion a ∈ [0, 1] within reach and the average occluded direction (f32 × 4); the same within the near reach (f32 × 4); the signed distance to the surface and the mean offset from the cell's centre to the points where rays meet the object within the near reach (f32 × 4, metres); cells x fastest, then y, then z |
+//! | 64 per cell | occlusion a ∈ [0, 1] within reach and the average occluded direction (f32 × 4); the same within the near reach (f32 × 4); the signed distance to the surface and the mean offset from the cell's centre to the points where rays meet the object within the near reach (f32 × 4, metres); the share of the object's own surface's hemisphere blocked beyond the near reach, at the surface point nearest the cell, and that surface's unit normal on the cell's side (f32 × 4, zero away from the surface and inside the object); cells x fastest, then y, then z |
 //! | 8 | FNV-1a 64-bit hash of every byte before it |
 
 use bevy::asset::Asset;
@@ -19,13 +19,14 @@ use bevy::reflect::TypePath;
 
 /// First bytes of every `.aofield` file.
 pub const MAGIC: &[u8; 8] = b"AOFIELD\0";
-/// The version this crate writes and reads (version 1 held occlusion at unlimited distance only).
-pub const VERSION: u32 = 2;
+/// The version this crate writes and reads (version 1 held occlusion at unlimited distance only;
+/// version 2 nothing for the object's own surface).
+pub const VERSION: u32 = 3;
 /// Largest grid resolution per axis.
 pub const MAX_RESOLUTION: u32 = 256;
 const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12 + 8;
 /// Floats per cell in the file.
-const CELL_FLOATS: usize = 12;
+const CELL_FLOATS: usize = 16;
 const CHECKSUM_BYTES: usize = 8;
 
 /// A baked ambient occlusion field (Malmer et al. 2005): per grid cell, the fraction of the
@@ -55,6 +56,13 @@ pub struct AoFieldData {
     /// centre to the points where rays meet the object within `near_reach` (zero without any),
     /// metres.
     pub distances: Vec<[f32; 4]>,
+    /// Per cell outside the object within two cells of its surface: the share of the
+    /// cosine-weighted hemisphere of the object's surface point nearest the cell that the object
+    /// blocks between `near_reach` and `reach`, among the directions open within `near_reach`
+    /// (what the near field, which shades the object's own surface within `near_reach`, leaves
+    /// out), then that point's unit normal on the cell's side. Zero elsewhere and in fields
+    /// without a near reach.
+    pub own_surface: Vec<[f32; 4]>,
 }
 
 /// Why bytes are not a valid `.aofield` file.
@@ -168,10 +176,14 @@ impl AoFieldData {
         {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
-        for ((cell, near), distances) in
-            self.cells.iter().zip(&self.near_cells).zip(&self.distances)
+        for (((cell, near), distances), own) in self
+            .cells
+            .iter()
+            .zip(&self.near_cells)
+            .zip(&self.distances)
+            .zip(&self.own_surface)
         {
-            for v in cell.iter().chain(near).chain(distances) {
+            for v in cell.iter().chain(near).chain(distances).chain(own) {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -221,7 +233,8 @@ impl AoFieldData {
         if fnv1a(body) != stored {
             return Err(AoFieldError::ChecksumMismatch);
         }
-        let (mut far, mut near, mut distances) = (
+        let (mut far, mut near, mut distances, mut own) = (
+            Vec::with_capacity(cells),
             Vec::with_capacity(cells),
             Vec::with_capacity(cells),
             Vec::with_capacity(cells),
@@ -231,13 +244,15 @@ impl AoFieldData {
             let v: [f32; CELL_FLOATS] = std::array::from_fn(|k| f32_at(at + 4 * k));
             let valid = v.iter().all(|v| v.is_finite())
                 && (0.0..=1.0).contains(&v[0])
-                && (0.0..=1.0).contains(&v[4]);
+                && (0.0..=1.0).contains(&v[4])
+                && (0.0..=1.0).contains(&v[12]);
             if !valid {
                 return Err(AoFieldError::BadCell(i));
             }
             far.push([v[0], v[1], v[2], v[3]]);
             near.push([v[4], v[5], v[6], v[7]]);
             distances.push([v[8], v[9], v[10], v[11]]);
+            own.push([v[12], v[13], v[14], v[15]]);
         }
         Ok(Self {
             resolution,
@@ -248,6 +263,7 @@ impl AoFieldData {
             cells: far,
             near_cells: near,
             distances,
+            own_surface: own,
         })
     }
 }
@@ -263,6 +279,7 @@ mod tests {
         let distances = (0..24)
             .map(|i| [i as f32 - 12.0, 0.25, 0.0, -0.5])
             .collect();
+        let own_surface = (0..24).map(|i| [i as f32 / 96.0, 0.0, 0.0, 1.0]).collect();
         AoFieldData {
             resolution,
             center: Vec3::new(0.5, 1.0, -2.0),
@@ -272,6 +289,7 @@ mod tests {
             cells,
             near_cells,
             distances,
+            own_surface,
         }
     }
 
@@ -313,6 +331,7 @@ mod tests {
         huge.cells.truncate(4);
         huge.near_cells.truncate(4);
         huge.distances.truncate(4);
+        huge.own_surface.truncate(4);
         assert!(matches!(
             AoFieldData::from_bytes(&huge.to_bytes()),
             Err(AoFieldError::BadResolution(_))
@@ -322,6 +341,12 @@ mod tests {
         assert_eq!(
             AoFieldData::from_bytes(&nan.to_bytes()),
             Err(AoFieldError::BadCell(3))
+        );
+        let mut own = field();
+        own.own_surface[5][0] = 1.5;
+        assert_eq!(
+            AoFieldData::from_bytes(&own.to_bytes()),
+            Err(AoFieldError::BadCell(5))
         );
         // Every message names the problem in words.
         for error in [

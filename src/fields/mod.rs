@@ -33,6 +33,19 @@
 //!   points outside it (no interior fill needed) and fades the field out over the half cell next
 //!   to the object, so the object's own surface is left to the near field: an open floor with its
 //!   own field reads 1.
+//! - **Its own surface beyond the near field's reach.** Under count-once the near field reaches
+//!   only [`near_field_radius`](crate::DynamicAo::near_field_radius) (0.5 m), so a concave
+//!   object's occlusion of itself beyond that (a ring's far side across its hole) was counted by
+//!   nothing: joined to the default at 2 m an AO field made a ring on a floor worse than no field
+//!   (1.10× the error). Grid points outside the object within two cells of its surface store,
+//!   for the surface point nearest them (the nearest of their rays' hits), the share of its
+//!   cosine-weighted hemisphere the object blocks between the near reach and R among the
+//!   directions open within the near reach, and that surface's normal on their side; the lookup
+//!   reads it where the field fades out, from the points whose surface faces the way the
+//!   receiver does (so a thin object's two sides stay apart), and it joins the part beyond the
+//!   near field's reach. The ring: 0.68×.
+//!   Not on skinned or morphed meshes: their surface moves away from the pose they were baked in
+//!   (a running fox's legs read darker than with no field at 2 m).
 //! - **Reach in world units.** A field the plugin bakes is baked from the mesh scaled by its
 //!   entity's world scale and placed without that scale, so R counts metres whatever units the
 //!   mesh was modelled in. Baked in mesh space, a model in centimetres scaled by 0.01 reached

@@ -17,7 +17,7 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use super::baker::{BakeGrid, BakeSettings, FieldReach, bake};
 use super::cache::{self, CacheMiss};
 use super::component::{AoField, AoFieldCache};
-use super::format::AoFieldData;
+use super::format::{self, AoFieldData};
 use crate::geometry::deform::{Deformer, Pose};
 use crate::geometry::deform::{mesh_morph_weights, skin_joints};
 use crate::geometry::rest_mesh::RestMesh;
@@ -108,6 +108,10 @@ fn content_hash(triangles: &[Triangle], settings: &BakeSettings) -> u64 {
     for v in settings_key(settings) {
         eat(&v.to_le_bytes());
     }
+    // Files of another format version are other files: they miss instead of being rejected. So
+    // are those of another release of this crate, whose baker may count differently.
+    eat(&format::VERSION.to_le_bytes());
+    eat(env!("CARGO_PKG_VERSION").as_bytes());
     hash
 }
 
@@ -388,8 +392,15 @@ pub(crate) fn resolve_fields(
                         };
                         let triangles = bake_triangles(data, pose, scale);
                         let folder = cache.folder.clone();
-                        let task = AsyncComputeTaskPool::get()
-                            .spawn(async move { bake_or_load(triangles, settings, folder) });
+                        let task = AsyncComputeTaskPool::get().spawn(async move {
+                            let mut field = bake_or_load(triangles, settings, folder);
+                            if posed && let Ok(field) = &mut field {
+                                // Its own surface moves away from where it was baked (a running
+                                // fox's legs): measured darker than the near field alone.
+                                field.own_surface.fill([0.0; 4]);
+                            }
+                            field
+                        });
                         baked.pending.insert(key, task);
                     }
                     None

@@ -1,8 +1,8 @@
 //! AO field occlusion (Malmer et al. 2005, §3.2–3.3) on the CPU, exactly as `fields/fields.wgsl`
 //! evaluates it: trilinear interpolation between cell centres over the corners outside the
-//! object, the fade on the object's own surface, 2a or the clipped cone (T_clip, through
-//! [`cap_occlusion`]) per occluder, split into the near field's share and the rest, visibilities
-//! multiplied.
+//! object, the fade on the object's own surface and its own share beyond the near reach there,
+//! 2a or the clipped cone (T_clip, through [`cap_occlusion`]) per occluder, split into the near
+//! field's share and the rest, visibilities multiplied.
 
 use bevy::math::{Affine3A, Vec3, Vec4};
 
@@ -22,17 +22,22 @@ pub struct FieldSample {
     pub near_offset: Vec3,
     /// Signed distance to the object's surface, mesh units.
     pub signed_distance: f32,
+    /// On the object's own surface, the share of its hemisphere blocked beyond the near reach.
+    pub own_surface: f32,
 }
 
-/// `field` at grid coordinates `uvw` ∈ [0, 1]³.
-pub fn sample_field(field: &AoFieldData, uvw: Vec3) -> FieldSample {
+/// Own-surface grid points whose surface normal is this close to the receiver's count.
+const SAME_SIDE: f32 = 0.5;
+
+/// `field` at grid coordinates `uvw` ∈ [0, 1]³, for a receiver with mesh-space unit normal `n`.
+pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
     let r = field.resolution.as_vec3();
     let g = (uvw * r - 0.5).clamp(Vec3::ZERO, r - 1.0);
     let i0 = g.floor().as_uvec3();
     let i1 = (i0 + 1).min(field.resolution - 1);
     let f = g - i0.as_vec3();
     let mut out = FieldSample::default();
-    let mut outside = 0.0;
+    let (mut outside, mut facing) = (0.0, 0.0);
     for corner in 0..8u32 {
         let pick = |bit: u32| corner & bit != 0;
         let c = [
@@ -49,6 +54,11 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3) -> FieldSample {
         let i = field.index(c[0], c[1], c[2]);
         let [signed, ox, oy, oz] = field.distances[i];
         out.signed_distance += w * signed;
+        let [own, sx, sy, sz] = field.own_surface[i];
+        if Vec3::new(sx, sy, sz).dot(n) > SAME_SIDE {
+            facing += w;
+            out.own_surface += w * own;
+        }
         if signed > 0.0 {
             outside += w;
             out.far += w * Vec4::from_array(field.cells[i]);
@@ -61,6 +71,9 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3) -> FieldSample {
         out.near /= outside;
         out.near_offset /= outside;
     }
+    if facing > 0.0 {
+        out.own_surface /= facing;
+    }
     out
 }
 
@@ -72,7 +85,9 @@ fn smoothstep(edge: f32, x: f32) -> f32 {
 /// The two parts of the share of ambient light one occluder's field blocks at world position
 /// `p` with unit normal `n`: the part within `near` metres where `held(point, tolerance)` says
 /// the ND-buffer does not hold its occluders, and the share of the rest (see
-/// [`share_beyond`]); `near` ≤ 0: everything in the second. (0, 0) outside its grid box.
+/// [`share_beyond`]) with, on the object's own surface, the share it blocks of its own
+/// hemisphere beyond `near`; `near` ≤ 0: everything in the second, and nothing of the own
+/// surface. (0, 0) outside its grid box.
 pub fn occluder_occlusion(
     field: &AoFieldData,
     world_from_mesh: Affine3A,
@@ -87,7 +102,8 @@ pub fn occluder_occlusion(
     if uvw.min_element() < 0.0 || uvw.max_element() > 1.0 {
         return [0.0, 0.0];
     }
-    let s = sample_field(field, uvw);
+    let mesh_normal = (world_from_mesh.matrix3.transpose() * n).normalize_or_zero();
+    let s = sample_field(field, uvw, mesh_normal);
     let fade = smoothstep(field.own_surface_fade(), s.signed_distance);
     let cone = |c: Vec4| match shading {
         FieldShading::OcclusionOnly => (2.0 * c.x).min(1.0),
@@ -110,7 +126,7 @@ pub fn occluder_occlusion(
     let at = p + world_from_mesh.matrix3 * s.near_offset;
     [
         inner * (1.0 - held(at, 0.1 * near)),
-        share_beyond(all, inner),
+        (share_beyond(all, inner) + s.own_surface * (1.0 - fade)).min(1.0),
     ]
 }
 

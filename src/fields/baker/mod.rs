@@ -8,7 +8,9 @@
 //! leave to the near field what it counts (see `FarFieldBlend::CountOnce`). It also stores its
 //! signed distance to the object, so that the lookup never blends values from inside the object
 //! or from the far side of a thin one into a point on its surface, and leaves the object's own
-//! surface to the near field.
+//! surface to the near field. The near field reaches only its own distance there, so grid points
+//! next to the surface also store what lies beyond it: rays over the cosine-weighted hemisphere
+//! of the nearest surface point, the share that meets the object between the near reach and R.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -300,7 +302,15 @@ pub fn bake(
     };
     let bvh = Bvh::new(triangles);
     let directions = sphere_directions(settings.rays);
+    let hemisphere = cosine_hemisphere(settings.rays);
     let cell_size = 2.0 * half_extent / resolution.as_vec3();
+    let own = OwnSurface {
+        hemisphere: &hemisphere,
+        // A receiver on the surface interpolates grid points up to a cell's diagonal from it.
+        within: 2.0 * cell_size.max_element(),
+        // Nothing to add where the near field reaches as far as the field.
+        skip: !(near.is_finite() && near < reach),
+    };
     let origin = center - half_extent;
     let miss = 2.0 * half_extent.length();
 
@@ -320,14 +330,14 @@ pub fn bake(
             chunks[z % threads].push((z, chunk));
         }
         for work in chunks {
-            let (bvh, directions, done) = (&bvh, &directions, &done);
+            let (bvh, directions, done, own) = (&bvh, &directions, &done, &own);
             scope.spawn(move || {
                 for (z, chunk) in work {
                     for y in 0..ny {
                         for x in 0..nx {
                             let p = origin
                                 + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell_size;
-                            chunk[y * nx + x] = sample(bvh, directions, p, reach, near, miss);
+                            chunk[y * nx + x] = sample(bvh, directions, own, p, reach, near, miss);
                         }
                     }
                     progress(done.fetch_add(1, Ordering::Relaxed) + 1, nz);
@@ -352,6 +362,7 @@ pub fn bake(
                 [c.signed_distance, o.x, o.y, o.z]
             })
             .collect(),
+        own_surface: cells.iter().map(|c| c.own_surface).collect(),
     };
     if settings.fill_interior {
         fill_interior(&mut field);
@@ -369,24 +380,94 @@ struct Cell {
     near: [f32; 4],
     signed_distance: f32,
     near_offset: Vec3,
+    own_surface: [f32; 4],
+}
+
+/// How the grid points next to the surface sample the surface's own hemisphere.
+struct OwnSurface<'a> {
+    /// Cosine-weighted directions about +z.
+    hemisphere: &'a [Vec3],
+    /// Grid points this close to the surface sample it, mesh units.
+    within: f32,
+    /// Sample nothing (the field has no near reach below its reach).
+    skip: bool,
+}
+
+/// `count` directions over the hemisphere about +z with density cos θ / π: a Fibonacci lattice
+/// on the unit disc lifted onto the hemisphere (Malley's method).
+fn cosine_hemisphere(count: u32) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..count)
+        .map(|i| {
+            let r = ((i as f32 + 0.5) / count as f32).sqrt();
+            let phi = golden * i as f32;
+            Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - r * r).max(0.0).sqrt())
+        })
+        .collect()
+}
+
+/// At surface point `at` with unit normal `n` (on the side to sample): of the hemisphere's
+/// directions that meet nothing within `near`, the share that meets the object within `reach`.
+/// This is what ground truth counts on the surface beyond the near field's reach, as the
+/// probability compose's independent join expects (`share_beyond` on the GPU).
+fn beyond_near(bvh: &Bvh, hemisphere: &[Vec3], at: Vec3, n: Vec3, near: f32, reach: f32) -> f32 {
+    let (t1, t2) = n.any_orthonormal_pair();
+    // Off the surface by a hair, so the ray does not meet the triangle it starts on.
+    let origin = at + n * (1e-4 * (1.0 + at.abs().max_element()));
+    let (mut open, mut beyond) = (0u32, 0u32);
+    for h in hemisphere {
+        let d = t1 * h.x + t2 * h.y + n * h.z;
+        match bvh.closest_hit(origin, d, 0.0, reach) {
+            Some(hit) if hit.t < near => {}
+            Some(hit) if hit.t < reach => {
+                open += 1;
+                beyond += 1;
+            }
+            _ => open += 1,
+        }
+    }
+    if open == 0 {
+        0.0
+    } else {
+        beyond as f32 / open as f32
+    }
 }
 
 /// Occlusion (eq. 2: the blocked fraction of all directions) and average occluded direction at
 /// `p`, for hits within `reach` and within `near`; the signed distance to the surface (the
 /// nearest hit, negative where most hits meet back faces: inside a closed object or behind a
 /// one-sided one; `miss` where nothing is hit) and the mean offset to the near hits: a point on
-/// (or within) the part of the object the near rays meet.
-fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3, reach: f32, near: f32, miss: f32) -> Cell {
+/// (or within) the part of the object the near rays meet. Outside the object and within
+/// `own.within` of its surface, the nearest hit stands for the nearest surface point, and its
+/// hemisphere on this point's side is sampled beyond the near reach ([`beyond_near`]).
+fn sample(
+    bvh: &Bvh,
+    directions: &[Vec3],
+    own: &OwnSurface,
+    p: Vec3,
+    reach: f32,
+    near: f32,
+    miss: f32,
+) -> Cell {
     let (mut far_count, mut near_count) = (0u32, 0u32);
     let (mut far_sum, mut near_sum) = (Vec3::ZERO, Vec3::ZERO);
     let (mut nearest, mut near_offset, mut back, mut front) =
         (f32::INFINITY, Vec3::ZERO, 0u32, 0u32);
+    // The nearest hit's point and its triangle's unit normal turned towards `p`.
+    let mut nearest_surface = (Vec3::ZERO, Vec3::ZERO);
     for &d in directions {
         let Some(hit) = bvh.closest_hit(p, d, 0.0, f32::INFINITY) else {
             continue;
         };
-        nearest = nearest.min(hit.t);
-        if bvh.triangles()[hit.triangle].face_normal().dot(d) > 0.0 {
+        let normal = bvh.triangles()[hit.triangle]
+            .face_normal()
+            .normalize_or_zero();
+        if hit.t < nearest {
+            nearest = hit.t;
+            let side = if normal.dot(d) > 0.0 { -normal } else { normal };
+            nearest_surface = (p + d * hit.t, side);
+        }
+        if normal.dot(d) > 0.0 {
             back += 1;
         } else {
             front += 1;
@@ -407,6 +488,16 @@ fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3, reach: f32, near: f32, miss: 
         [count as f32 / rays, d.x, d.y, d.z]
     };
     let distance = if nearest.is_finite() { nearest } else { miss };
+    let (at, side) = nearest_surface;
+    // Points inside the object are never read: the lookup takes the grid points outside (a
+    // point inside a box, under its bottom face, would see the box's inside from there).
+    let inside = back > front;
+    let own_surface = if own.skip || inside || nearest > own.within || side == Vec3::ZERO {
+        [0.0; 4]
+    } else {
+        let share = beyond_near(bvh, own.hemisphere, at, side, near, reach);
+        [share, side.x, side.y, side.z]
+    };
     Cell {
         far: cone(far_count, far_sum),
         near: cone(near_count, near_sum),
@@ -416,6 +507,7 @@ fn sample(bvh: &Bvh, directions: &[Vec3], p: Vec3, reach: f32, near: f32, miss: 
         } else {
             Vec3::ZERO
         },
+        own_surface,
     }
 }
 

@@ -302,3 +302,125 @@ fn baking_is_deterministic() {
         bake(cube(), &settings, &|_, _| {})
     );
 }
+
+/// Two facing 1 m × 1 m walls of one open mesh, 0.6 m apart: wall A in the plane x = 0 facing +x,
+/// wall B in x = 0.6 facing −x.
+fn channel() -> Vec<Triangle> {
+    let quad = |x: f32, facing: f32| {
+        let corner = |y: f32, z: f32| Vec3::new(x, y, z);
+        let (a, b, c, d) = (
+            corner(0.0, -0.5),
+            corner(1.0, -0.5),
+            corner(1.0, 0.5),
+            corner(0.0, 0.5),
+        );
+        let tri = |v: [Vec3; 3]| Triangle {
+            vertices: v,
+            normals: None,
+        };
+        // Counter-clockwise seen from +x when `facing` > 0.
+        if facing > 0.0 {
+            [tri([a, b, c]), tri([a, c, d])]
+        } else {
+            [tri([a, c, b]), tri([a, d, c])]
+        }
+    };
+    quad(0.0, 1.0).into_iter().chain(quad(0.6, -1.0)).collect()
+}
+
+/// Of cosine-weighted pseudo-random directions about `n` at `p` that meet nothing within `near`,
+/// the share that meets a triangle within `reach`: every triangle tested, no BVH, no shared
+/// direction set.
+fn brute_force_beyond(triangles: &[Triangle], p: Vec3, n: Vec3, near: f32, reach: f32) -> f32 {
+    let mut state = 777u32;
+    let mut next = || {
+        state = crate::geometry::hash::pcg_hash(state);
+        state as f32 / u32::MAX as f32
+    };
+    let (t1, t2) = n.any_orthonormal_pair();
+    let (mut open, mut beyond) = (0u32, 0u32);
+    for _ in 0..4096 {
+        let (r, phi) = (next().sqrt(), std::f32::consts::TAU * next());
+        let d = t1 * r * phi.cos() + t2 * r * phi.sin() + n * (1.0 - r * r).max(0.0).sqrt();
+        let t = triangles
+            .iter()
+            .filter_map(|t| {
+                let [a, b, c] = t.vertices;
+                let (e1, e2) = (b - a, c - a);
+                let h = d.cross(e2);
+                let det = e1.dot(h);
+                let s = p - a;
+                let (u, q) = (s.dot(h) / det, s.cross(e1));
+                let v = d.dot(q) / det;
+                let t = e2.dot(q) / det;
+                (det.abs() > 1e-9 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 1e-4).then_some(t)
+            })
+            .fold(f32::INFINITY, f32::min);
+        if t >= near {
+            open += 1;
+            beyond += u32::from(t < reach);
+        }
+    }
+    beyond as f32 / open as f32
+}
+
+#[test]
+fn the_own_surface_gets_its_share_beyond_the_near_reach_on_its_side_only() {
+    use crate::reference::fields::occluder_occlusion;
+    use crate::settings::FieldShading;
+    let (reach, near) = (1.0, 0.3);
+    let settings = BakeSettings {
+        resolution: 24,
+        rays: 512,
+        reach: FieldReach::Distance { reach, near },
+        ..default()
+    };
+    let field = bake(channel(), &settings, &|_, _| {}).unwrap();
+    let nothing_held = |_: Vec3, _: f32| 0.0;
+    let lookup = |p: Vec3, n: Vec3| {
+        occluder_occlusion(
+            &field,
+            Affine3A::IDENTITY,
+            p,
+            n,
+            FieldShading::Cone,
+            near,
+            &nothing_held,
+        )
+    };
+    for p in [
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::new(0.0, 0.3, 0.2),
+        Vec3::new(0.6, 0.6, -0.1),
+    ] {
+        let inward = if p.x < 0.3 { Vec3::X } else { Vec3::NEG_X };
+        let truth = brute_force_beyond(&channel(), p, inward, near, reach);
+        let [near_part, beyond] = lookup(p, inward);
+        // The facing wall 0.6 m away lies wholly beyond the near reach: only the second part.
+        assert!(near_part < 1e-4, "{p}: {near_part}");
+        println!("{p}: own surface beyond the near reach {beyond}, brute force {truth}");
+        assert!(
+            truth > 0.25 && (beyond - truth).abs() < 0.015,
+            "{p}: {beyond} against {truth}"
+        );
+        // The wall's other side sees nothing of the object, and does not read this side's share.
+        let [near_part, beyond] = lookup(p, -inward);
+        assert!(near_part < 1e-4, "{p}: {near_part}");
+        assert!(beyond < 0.01, "{p}, outer side: {beyond}");
+    }
+    // A convex object blocks nothing of its own surface's hemispheres, and the points inside it
+    // store nothing (from under a box's bottom face they would see its inside).
+    let convex = bake(cube(), &settings, &|_, _| {}).unwrap();
+    assert!(convex.own_surface.iter().all(|c| c[0] == 0.0));
+    assert!(
+        convex.own_surface.iter().any(|c| c[1..] != [0.0; 3]),
+        "the points next to its faces store their side"
+    );
+    // Without a near reach below the reach (the near field reaches R), nothing is stored.
+    let settings = BakeSettings {
+        reach: FieldReach::Distance { reach, near: reach },
+        ..settings
+    };
+    let field = bake(channel(), &settings, &|_, _| {}).unwrap();
+    assert!(field.own_surface.iter().all(|c| *c == [0.0; 4]));
+}
