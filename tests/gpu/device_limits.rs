@@ -146,7 +146,8 @@ fn voxel_triangles_past_the_binding_limit_are_left_out_with_a_warning() {
     );
 }
 
-/// A field bakes at `resolution`³: 16³ cells take 196,608 bytes, 32³ 1,572,864.
+/// A field bakes at `resolution`³: 16³ cells take 262,144 bytes (the limit exactly), 32³
+/// 2,097,152.
 fn field(resolution: u32) -> AoField {
     AoField::Bake(BakeSettings {
         resolution,
@@ -198,7 +199,7 @@ fn a_field_past_the_binding_limit_casts_nothing_with_a_warning() {
     .frame(4)
     .visibility;
     assert_logged_once(&[
-        "AoField: a field of 32768 cells (1572864 bytes) does not fit",
+        "AoField: a field of 32768 cells (2097152 bytes) does not fit",
         "max_storage_buffer_binding_size is 262144",
     ]);
     let expected = baked(Gpu::new(&small_only, fields_only), 1)
