@@ -47,6 +47,8 @@ def with_camera(j):
         j['scenes'][0]['nodes'].append(len(j['nodes'])-1)
     return j
 muts={}
+def primitives(j):
+    return (p for me in j['meshes'] for p in me['primitives'])
 def m(name):
     def d(f): muts[name]=f; return f
     return d
@@ -86,63 +88,52 @@ def _(j,b): j['cameras'][0]={'type':'orthographic','orthographic':{'xmag':0,'yma
 def _(j,b): j['cameras'][0]={'type':'orthographic','orthographic':{'xmag':4,'ymag':3,'znear':0.1,'zfar':100}}; return j,b
 @m('prim_points')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p['mode']=0
+    for p in primitives(j): p['mode']=0
     return j,b
 @m('prim_lines')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p['mode']=1
+    for p in primitives(j): p['mode']=1
     return j,b
 @m('prim_strip')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p['mode']=5
+    for p in primitives(j): p['mode']=5
     return j,b
 @m('indices_as_vec3')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'indices' in p: j['accessors'][p['indices']]['type']='VEC3'
+    for p in primitives(j):
+        if 'indices' in p: j['accessors'][p['indices']]['type']='VEC3'
     return j,b
 @m('indices_float')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'indices' in p: j['accessors'][p['indices']]['componentType']=5126
+    for p in primitives(j):
+        if 'indices' in p: j['accessors'][p['indices']]['componentType']=5126
     return j,b
 @m('indices_count_huge')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'indices' in p: j['accessors'][p['indices']]['count']=10**9
+    for p in primitives(j):
+        if 'indices' in p: j['accessors'][p['indices']]['count']=10**9
     return j,b
 @m('no_indices_count_not_mult3')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p.pop('indices',None)
+    for p in primitives(j): p.pop('indices',None)
     return j,b
 @m('normal_vec2')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'NORMAL' in p['attributes']: j['accessors'][p['attributes']['NORMAL']]['type']='VEC2'
+    for p in primitives(j):
+        if 'NORMAL' in p['attributes']: j['accessors'][p['attributes']['NORMAL']]['type']='VEC2'
     return j,b
 @m('normal_count_short')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'NORMAL' in p['attributes']: j['accessors'][p['attributes']['NORMAL']]['count']=1
+    for p in primitives(j):
+        if 'NORMAL' in p['attributes']: j['accessors'][p['attributes']['NORMAL']]['count']=1
     return j,b
 @m('uv_wrong')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p['attributes']['TEXCOORD_0']=p['attributes']['POSITION']
+    for p in primitives(j): p['attributes']['TEXCOORD_0']=p['attributes']['POSITION']
     return j,b
 @m('material_out_of_range')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']: p['material']=99
+    for p in primitives(j): p['material']=99
     return j,b
 @m('mesh_out_of_range')
 def _(j,b):
@@ -276,9 +267,8 @@ def _(j,b):
     return j,bytes(bb)
 @m('weights_nan')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'WEIGHTS_0' in p['attributes']:
+    for p in primitives(j):
+        if 'WEIGHTS_0' in p['attributes']:
                 a=j['accessors'][p['attributes']['WEIGHTS_0']]; v=j['bufferViews'][a['bufferView']]; off=v.get('byteOffset',0)+a.get('byteOffset',0)
                 if a['componentType']==5126:
                     bb=bytearray(b)
@@ -287,9 +277,8 @@ def _(j,b):
     return j,b
 @m('joints_out_of_range_values')
 def _(j,b):
-    for me in j['meshes']:
-        for p in me['primitives']:
-            if 'JOINTS_0' in p['attributes']:
+    for p in primitives(j):
+        if 'JOINTS_0' in p['attributes']:
                 a=j['accessors'][p['attributes']['JOINTS_0']]; v=j['bufferViews'][a['bufferView']]; off=v.get('byteOffset',0)+a.get('byteOffset',0)
                 size={5121:1,5123:2}[a['componentType']]
                 bb=bytearray(b)

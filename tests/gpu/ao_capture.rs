@@ -312,6 +312,19 @@ fn capture_small(scene: &Path, out_ao: &Path, technique: &str) -> String {
     stderr
 }
 
+/// The generated scene without its cube (mesh 1), written into `dir`: what a capture that leaves
+/// the cube out must match.
+fn generated_scene_without_its_cube(dir: &Path) -> PathBuf {
+    let without = dir.join("without.glb");
+    let (meshes, nodes) = gltf_scene::cube_on_plane();
+    let nodes: Vec<_> = nodes
+        .into_iter()
+        .filter(|n| !matches!(n.kind, NodeKind::Mesh(1)))
+        .collect();
+    std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
+    without
+}
+
 /// A primitive whose positions cannot be read (its accessor runs past its buffer) loads as a mesh
 /// without positions, which Bevy's prepass pipeline fails wgpu's validation on: the capture leaves
 /// that mesh out with a warning naming it and renders the rest, as the same scene without it.
@@ -327,13 +340,7 @@ fn a_mesh_without_readable_positions_is_left_out_with_a_warning() {
         }),
     )
     .unwrap();
-    let without = dir.join("without.glb");
-    let (meshes, nodes) = gltf_scene::cube_on_plane();
-    let nodes: Vec<_> = nodes
-        .into_iter()
-        .filter(|n| !matches!(n.kind, NodeKind::Mesh(1)))
-        .collect();
-    std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
+    let without = generated_scene_without_its_cube(&dir);
     let capture = |scene: &Path, name: &str| {
         let out_ao = dir.join(name);
         let stderr = capture_near_field(scene, &out_ao);
@@ -378,13 +385,7 @@ fn a_mesh_without_triangles_does_not_hold_up_a_fields_capture() {
         }),
     )
     .unwrap();
-    let without = dir.join("without.glb");
-    let (meshes, nodes) = gltf_scene::cube_on_plane();
-    let nodes: Vec<_> = nodes
-        .into_iter()
-        .filter(|n| !matches!(n.kind, NodeKind::Mesh(1)))
-        .collect();
-    std::fs::write(&without, gltf_scene::write_glb(&meshes, &nodes)).unwrap();
+    let without = generated_scene_without_its_cube(&dir);
     let log = capture_small(&lines, &dir.join("lines.png"), "fields");
     assert!(!log.contains("panicked"), "nothing may panic:\n{log}");
     let warnings: Vec<&str> = log

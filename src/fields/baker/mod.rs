@@ -22,6 +22,12 @@ use crate::geometry::bvh::Bvh;
 use crate::geometry::triangles::Triangle;
 use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 
+mod own_surface;
+mod paper;
+
+use own_surface::{OwnSurface, beyond_near, cosine_hemisphere};
+pub use paper::{fill_interior, rescale_border};
+
 /// How far a field's occlusion reaches, which also sets its grid's extent.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Clone, Debug, PartialEq)]
@@ -383,56 +389,6 @@ struct Cell {
     own_surface: [f32; 4],
 }
 
-/// How the grid points next to the surface sample the surface's own hemisphere.
-struct OwnSurface<'a> {
-    /// Cosine-weighted directions about +z.
-    hemisphere: &'a [Vec3],
-    /// Grid points this close to the surface sample it, mesh units.
-    within: f32,
-    /// Sample nothing (the field has no near reach below its reach).
-    skip: bool,
-}
-
-/// `count` directions over the hemisphere about +z with density cos θ / π: a Fibonacci lattice
-/// on the unit disc lifted onto the hemisphere (Malley's method).
-fn cosine_hemisphere(count: u32) -> Vec<Vec3> {
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    (0..count)
-        .map(|i| {
-            let r = ((i as f32 + 0.5) / count as f32).sqrt();
-            let phi = golden * i as f32;
-            Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - r * r).max(0.0).sqrt())
-        })
-        .collect()
-}
-
-/// At surface point `at` with unit normal `n` (on the side to sample): of the hemisphere's
-/// directions that meet nothing within `near`, the share that meets the object within `reach`.
-/// This is what ground truth counts on the surface beyond the near field's reach, as the
-/// probability compose's independent join expects (`share_beyond` on the GPU).
-fn beyond_near(bvh: &Bvh, hemisphere: &[Vec3], at: Vec3, n: Vec3, near: f32, reach: f32) -> f32 {
-    let (t1, t2) = n.any_orthonormal_pair();
-    // Off the surface by a hair, so the ray does not meet the triangle it starts on.
-    let origin = at + n * (1e-4 * (1.0 + at.abs().max_element()));
-    let (mut open, mut beyond) = (0u32, 0u32);
-    for h in hemisphere {
-        let d = t1 * h.x + t2 * h.y + n * h.z;
-        match bvh.closest_hit(origin, d, 0.0, reach) {
-            Some(hit) if hit.t < near => {}
-            Some(hit) if hit.t < reach => {
-                open += 1;
-                beyond += 1;
-            }
-            _ => open += 1,
-        }
-    }
-    if open == 0 {
-        0.0
-    } else {
-        beyond as f32 / open as f32
-    }
-}
-
 /// Occlusion (eq. 2: the blocked fraction of all directions) and average occluded direction at
 /// `p`, for hits within `reach` and within `near`; the signed distance to the surface (the
 /// nearest hit, negative where most hits meet back faces: inside a closed object or behind a
@@ -508,78 +464,6 @@ fn sample(
             Vec3::ZERO
         },
         own_surface,
-    }
-}
-
-/// §3.4.2: cells inside the object (every ray blocked) take the mean of their neighbours that
-/// see out, so a surface point between an inside and an outside cell interpolates sensibly.
-/// One pass, as in the paper: cells deeper inside keep 1, and no surface point reads them.
-pub fn fill_interior(field: &mut AoFieldData) {
-    let r = field.resolution.as_ivec3();
-    for layer in [&mut field.cells, &mut field.near_cells] {
-        let original = layer.clone();
-        let index = |x: i32, y: i32, z: i32| ((z * r.y + y) * r.x + x) as usize;
-        for z in 0..r.z {
-            for y in 0..r.y {
-                for x in 0..r.x {
-                    let i = index(x, y, z);
-                    if original[i][0] < 1.0 {
-                        continue;
-                    }
-                    let (mut sum, mut dir, mut count) = (0.0, Vec3::ZERO, 0);
-                    for dz in -1..=1 {
-                        for dy in -1..=1 {
-                            for dx in -1..=1 {
-                                let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-                                if nx < 0 || ny < 0 || nz < 0 || nx >= r.x || ny >= r.y || nz >= r.z
-                                {
-                                    continue;
-                                }
-                                let c = original[index(nx, ny, nz)];
-                                if c[0] < 1.0 {
-                                    sum += c[0];
-                                    dir += Vec3::new(c[1], c[2], c[3]);
-                                    count += 1;
-                                }
-                            }
-                        }
-                    }
-                    if count > 0 {
-                        let d = dir.normalize_or_zero();
-                        layer[i] = [sum / count as f32, d.x, d.y, d.z];
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// Values at or below this are rescaled by §3.4.1; larger ones are kept.
-const RESCALE_LIMIT: f32 = 0.3;
-
-/// §3.4.1: with V_M the largest occlusion on the grid's boundary, every value V ≤ 0.3 becomes
-/// 0.3 (V − V_M) / (0.3 − V_M) (and at least 0), so the field fades to 0 at its boundary and
-/// joins the open space outside without a step. V_M is capped just below 0.3, where the formula
-/// would break down (a grid far too small for its object).
-pub fn rescale_border(field: &mut AoFieldData) {
-    let r = field.resolution;
-    let mut boundary_max = 0.0f32;
-    for z in 0..r.z {
-        for y in 0..r.y {
-            for x in 0..r.x {
-                let on_boundary =
-                    x == 0 || y == 0 || z == 0 || x == r.x - 1 || y == r.y - 1 || z == r.z - 1;
-                if on_boundary {
-                    boundary_max = boundary_max.max(field.cells[field.index(x, y, z)][0]);
-                }
-            }
-        }
-    }
-    let vm = boundary_max.min(RESCALE_LIMIT - 0.01);
-    for cell in field.cells.iter_mut().chain(&mut field.near_cells) {
-        if cell[0] <= RESCALE_LIMIT {
-            cell[0] = (RESCALE_LIMIT * (cell[0] - vm) / (RESCALE_LIMIT - vm)).max(0.0);
-        }
     }
 }
 
