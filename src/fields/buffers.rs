@@ -81,12 +81,12 @@ impl FieldInstance {
 }
 
 /// `vec4<f32>` per cell on the GPU (`fields.wgsl` reads them at this stride).
-const CELL_VEC4S: usize = 4;
+const CELL_VEC4S: usize = 7;
 /// Bytes one cell takes on the GPU.
 const CELL_BYTES: usize = CELL_VEC4S * 16;
 
 /// Most bytes every field in use may take together: the device's storage binding limit, and at
-/// most 512 MiB (a 256³ field alone takes 1074 MB).
+/// most 512 MiB (a 256³ field alone takes 1879 MB).
 fn field_budget(max_storage_binding: u64) -> u64 {
     max_storage_binding.min(512 << 20)
 }
@@ -96,9 +96,9 @@ fn field_budget(max_storage_binding: u64) -> u64 {
 pub(crate) struct FieldBuffers {
     /// Field assets in `cells`, in order, with their first cell.
     layout: Vec<(AssetId<AoFieldData>, u32)>,
-    /// Four vec4 per cell: far occlusion and direction, near occlusion and direction, signed
+    /// Seven vec4 per cell: far occlusion and direction, near occlusion and direction, signed
     /// distance and mean offset to the near hits, the own surface's share beyond the near reach
-    /// and its normal.
+    /// and its normal, and the cone's axis corrections (`AoFieldData::axes`, four per vec4).
     pub(super) cells: RawBufferVec<Vec4>,
     pub(super) instances: RawBufferVec<FieldInstance>,
     /// `cells` changed and must be written again.
@@ -188,18 +188,23 @@ pub(crate) fn extract_fields(
             buffers
                 .layout
                 .push((id, (buffers.cells.len() / CELL_VEC4S) as u32));
-            for (((far, near), distances), own) in field
+            for ((((far, near), distances), own), axes) in field
                 .cells
                 .iter()
                 .zip(&field.near_cells)
                 .zip(&field.distances)
                 .zip(&field.own_surface)
+                .zip(&field.axes)
             {
+                let axis = |k: usize| Vec4::new(axes[k], axes[k + 1], axes[k + 2], axes[k + 3]);
                 buffers.cells.extend([
                     Vec4::from_array(*far),
                     Vec4::from_array(*near),
                     Vec4::from_array(*distances),
                     Vec4::from_array(*own),
+                    axis(0),
+                    axis(4),
+                    axis(8),
                 ]);
             }
         }

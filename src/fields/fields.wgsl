@@ -29,7 +29,7 @@ struct FieldInstance {
     grid_from_world: mat4x4<f32>,
     // Mesh-space directions to world space (columns; w unused).
     world_from_mesh: mat3x4<f32>,
-    // Cells per axis, and the first cell in `cells` (each cell is four vec4).
+    // Cells per axis, and the first cell in `cells` (each cell is seven vec4).
     resolution: vec3<u32>,
     offset: u32,
     // x: how far from the object's surface its own surface's fade ends, mesh units.
@@ -91,6 +91,12 @@ struct FieldSample {
     signed_distance: f32,
     // On the object's own surface, the share of its hemisphere blocked beyond the near reach.
     own_surface: f32,
+    // The cone's errors on the axis hemispheres +x, +y, +z and −x, −y, −z, within R and within
+    // the near field's reach.
+    far_positive: vec3<f32>,
+    far_negative: vec3<f32>,
+    near_positive: vec3<f32>,
+    near_negative: vec3<f32>,
 }
 
 // Own-surface grid points whose surface normal is this close to the receiver's count.
@@ -111,6 +117,10 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     out.near_offset = vec3<f32>(0.0);
     out.signed_distance = 0.0;
     out.own_surface = 0.0;
+    out.far_positive = vec3<f32>(0.0);
+    out.far_negative = vec3<f32>(0.0);
+    out.near_positive = vec3<f32>(0.0);
+    out.near_negative = vec3<f32>(0.0);
     var outside = 0.0;
     var facing = 0.0;
     for (var corner = 0u; corner < 8u; corner++) {
@@ -118,7 +128,7 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
         let c = select(i0, i1, pick);
         let w3 = select(1.0 - f, f, pick);
         let w = w3.x * w3.y * w3.z;
-        let at = 4u * (field.offset + (c.z * field.resolution.y + c.y) * field.resolution.x + c.x);
+        let at = 7u * (field.offset + (c.z * field.resolution.y + c.y) * field.resolution.x + c.x);
         let distances = cells[at + 2u];
         out.signed_distance += w * distances.x;
         let own = cells[at + 3u];
@@ -131,12 +141,24 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
             out.far += w * cells[at];
             out.near += w * cells[at + 1u];
             out.near_offset += w * distances.yzw;
+            // +x, −x, +y, −y | +z, −z, near +x, −x | near +y, −y, +z, −z.
+            let a = cells[at + 4u];
+            let b = cells[at + 5u];
+            let c = cells[at + 6u];
+            out.far_positive += w * vec3<f32>(a.x, a.z, b.x);
+            out.far_negative += w * vec3<f32>(a.y, a.w, b.y);
+            out.near_positive += w * vec3<f32>(b.z, c.x, c.z);
+            out.near_negative += w * vec3<f32>(b.w, c.y, c.w);
         }
     }
     if outside > 0.0 {
         out.far /= outside;
         out.near /= outside;
         out.near_offset /= outside;
+        out.far_positive /= outside;
+        out.far_negative /= outside;
+        out.near_positive /= outside;
+        out.near_negative /= outside;
     }
     if facing > 0.0 {
         out.own_surface /= facing;
@@ -145,14 +167,25 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
 }
 
 // The share of light a cone of fraction `a` of the sphere around mesh-space `d` blocks at a
-// receiver with world normal `n`.
-fn cone_occlusion(field: FieldInstance, a: f32, d: vec3<f32>, n: vec3<f32>) -> f32 {
+// receiver with world normal `n` (mesh-space unit normal `n_mesh`), plus the baked corrections
+// of the cone on the axis hemispheres (`positive`, `negative`) weighted by the squared components
+// of `n_mesh`: exact where the receiver faces an axis (`fields::baker::axes`).
+fn cone_occlusion(
+    field: FieldInstance,
+    a: f32,
+    d: vec3<f32>,
+    n: vec3<f32>,
+    n_mesh: vec3<f32>,
+    positive: vec3<f32>,
+    negative: vec3<f32>,
+) -> f32 {
 #ifdef CONE
     let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
     let axis = m * d;
     let length2 = dot(axis, axis);
     let cos_beta = select(0.0, dot(axis, n) * inverseSqrt(length2), length2 > 1e-12);
-    return cap_occlusion(1.0 - 2.0 * clamp(a, 0.0, 1.0), cos_beta);
+    let correction = dot(n_mesh * n_mesh, select(negative, positive, n_mesh >= vec3<f32>(0.0)));
+    return clamp(cap_occlusion(1.0 - 2.0 * clamp(a, 0.0, 1.0), cos_beta) + correction, 0.0, 1.0);
 #else
     return min(2.0 * a, 1.0);
 #endif
@@ -175,15 +208,16 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     }
     let m = mat3x3<f32>(field.world_from_mesh[0].xyz, field.world_from_mesh[1].xyz, field.world_from_mesh[2].xyz);
     // Normals go to mesh space by the transpose (the inverse of the inverse transpose).
-    let s = sample_field(field, uvw, normalize(normal * m));
+    let n_mesh = normalize(normal * m);
+    let s = sample_field(field, uvw, n_mesh);
     // Nothing from the field on the object's own surface, fading in over the half cell next to it.
     let fade = smoothstep(0.0, field.params.x, s.signed_distance);
-    let all = cone_occlusion(field, s.far.x, s.far.yzw, normal) * fade;
+    let all = cone_occlusion(field, s.far.x, s.far.yzw, normal, n_mesh, s.far_positive, s.far_negative) * fade;
     let near = settings.near_field_radius;
     if near <= 0.0 {
         return vec4<f32>(0.0, all, 0.0, 0.0);
     }
-    let inner = cone_occlusion(field, s.near.x, s.near.yzw, normal) * fade;
+    let inner = cone_occlusion(field, s.near.x, s.near.yzw, normal, n_mesh, s.near_positive, s.near_negative) * fade;
     // The near part's occluders lie about its mean hit point.
     let at = p + m * s.near_offset;
     let held = nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, at, 0.1 * near);

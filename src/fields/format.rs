@@ -5,12 +5,12 @@
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `AOFIELD\0` |
-//! | 4 | version (u32, currently 3) |
+//! | 4 | version (u32, currently 4) |
 //! | 12 | grid resolution x, y, z (u32 each, 2 to [`MAX_RESOLUTION`]) |
 //! | 12 | grid box centre, mesh space (f32 × 3, metres) |
 //! | 12 | grid box half extents e_i (f32 × 3, metres, > 0) |
 //! | 8 | the distances the occlusion counts within: reach, then near reach (f32 × 2, metres, 0 = unlimited) |
-//! | 64 per cell | occlusion a ∈ [0, 1] within reach and the average occluded direction (f32 × 4); the same within the near reach (f32 × 4); the signed distance to the surface and the mean offset from the cell's centre to the points where rays meet the object within the near reach (f32 × 4, metres); the share of the object's own surface's hemisphere blocked beyond the near reach, at the surface point nearest the cell, and that surface's unit normal on the cell's side (f32 × 4, zero away from the surface and inside the object); cells x fastest, then y, then z |
+//! | 112 per cell | occlusion a ∈ [0, 1] within reach and the average occluded direction (f32 × 4); the same within the near reach (f32 × 4); the signed distance to the surface and the mean offset from the cell's centre to the points where rays meet the object within the near reach (f32 × 4, metres); the share of the object's own surface's hemisphere blocked beyond the near reach, at the surface point nearest the cell, and that surface's unit normal on the cell's side (f32 × 4, zero away from the surface and inside the object); the cone's error on the six axis hemispheres +x, −x, +y, −y, +z, −z within reach, then within the near reach (f32 × 12, each in [−1, 1]); cells x fastest, then y, then z |
 //! | 8 | FNV-1a 64-bit hash of every byte before it |
 
 use bevy::asset::Asset;
@@ -20,13 +20,13 @@ use bevy::reflect::TypePath;
 /// First bytes of every `.aofield` file.
 pub const MAGIC: &[u8; 8] = b"AOFIELD\0";
 /// The version this crate writes and reads (version 1 held occlusion at unlimited distance only;
-/// version 2 nothing for the object's own surface).
-pub const VERSION: u32 = 3;
+/// version 2 nothing for the object's own surface; version 3 no axis corrections).
+pub const VERSION: u32 = 4;
 /// Largest grid resolution per axis.
 pub const MAX_RESOLUTION: u32 = 256;
 const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12 + 8;
 /// Floats per cell in the file.
-const CELL_FLOATS: usize = 16;
+const CELL_FLOATS: usize = 28;
 const CHECKSUM_BYTES: usize = 8;
 
 /// A baked ambient occlusion field (Malmer et al. 2005): per grid cell, the fraction of the
@@ -63,6 +63,13 @@ pub struct AoFieldData {
     /// out), then that point's unit normal on the cell's side. Zero elsewhere and in fields
     /// without a near reach.
     pub own_surface: Vec<[f32; 4]>,
+    /// Per cell: what the cone model (`cells`, `near_cells` shaded as a cap clipped by the
+    /// receiver's tangent plane) gets wrong on the six axis hemispheres, true occlusion minus the
+    /// cone's, for receivers facing +x, −x, +y, −y, +z and −z (mesh space): within `reach`, then
+    /// within `near_reach`. The lookup adds them weighted by the squared components of the
+    /// receiver's normal, so an axis-facing receiver (a floor under a model standing upright)
+    /// reads the traced occlusion. Zero where the bake left the cone as the paper has it.
+    pub axes: Vec<[f32; 12]>,
 }
 
 /// Why bytes are not a valid `.aofield` file.
@@ -176,14 +183,21 @@ impl AoFieldData {
         {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
-        for (((cell, near), distances), own) in self
+        for ((((cell, near), distances), own), axes) in self
             .cells
             .iter()
             .zip(&self.near_cells)
             .zip(&self.distances)
             .zip(&self.own_surface)
+            .zip(&self.axes)
         {
-            for v in cell.iter().chain(near).chain(distances).chain(own) {
+            for v in cell
+                .iter()
+                .chain(near)
+                .chain(distances)
+                .chain(own)
+                .chain(axes)
+            {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -233,7 +247,8 @@ impl AoFieldData {
         if fnv1a(body) != stored {
             return Err(AoFieldError::ChecksumMismatch);
         }
-        let (mut far, mut near, mut distances, mut own) = (
+        let (mut far, mut near, mut distances, mut own, mut axes) = (
+            Vec::with_capacity(cells),
             Vec::with_capacity(cells),
             Vec::with_capacity(cells),
             Vec::with_capacity(cells),
@@ -245,7 +260,8 @@ impl AoFieldData {
             let valid = v.iter().all(|v| v.is_finite())
                 && (0.0..=1.0).contains(&v[0])
                 && (0.0..=1.0).contains(&v[4])
-                && (0.0..=1.0).contains(&v[12]);
+                && (0.0..=1.0).contains(&v[12])
+                && v[16..].iter().all(|c| (-1.0..=1.0).contains(c));
             if !valid {
                 return Err(AoFieldError::BadCell(i));
             }
@@ -253,6 +269,7 @@ impl AoFieldData {
             near.push([v[4], v[5], v[6], v[7]]);
             distances.push([v[8], v[9], v[10], v[11]]);
             own.push([v[12], v[13], v[14], v[15]]);
+            axes.push(std::array::from_fn(|k| v[16 + k]));
         }
         Ok(Self {
             resolution,
@@ -264,6 +281,7 @@ impl AoFieldData {
             near_cells: near,
             distances,
             own_surface: own,
+            axes,
         })
     }
 }
@@ -280,6 +298,9 @@ mod tests {
             .map(|i| [i as f32 - 12.0, 0.25, 0.0, -0.5])
             .collect();
         let own_surface = (0..24).map(|i| [i as f32 / 96.0, 0.0, 0.0, 1.0]).collect();
+        let axes = (0..24)
+            .map(|i| std::array::from_fn(|k| (i as f32 - k as f32) / 48.0))
+            .collect();
         AoFieldData {
             resolution,
             center: Vec3::new(0.5, 1.0, -2.0),
@@ -290,6 +311,7 @@ mod tests {
             near_cells,
             distances,
             own_surface,
+            axes,
         }
     }
 
@@ -332,6 +354,7 @@ mod tests {
         huge.near_cells.truncate(4);
         huge.distances.truncate(4);
         huge.own_surface.truncate(4);
+        huge.axes.truncate(4);
         assert!(matches!(
             AoFieldData::from_bytes(&huge.to_bytes()),
             Err(AoFieldError::BadResolution(_))
@@ -347,6 +370,12 @@ mod tests {
         assert_eq!(
             AoFieldData::from_bytes(&own.to_bytes()),
             Err(AoFieldError::BadCell(5))
+        );
+        let mut axes = field();
+        axes.axes[7][11] = -1.5;
+        assert_eq!(
+            AoFieldData::from_bytes(&axes.to_bytes()),
+            Err(AoFieldError::BadCell(7))
         );
         // Every message names the problem in words.
         for error in [

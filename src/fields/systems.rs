@@ -85,7 +85,9 @@ fn settings_key(settings: &BakeSettings) -> [u32; 7] {
         a.to_bits(),
         b.to_bits(),
         settings.rays,
-        u32::from(settings.rescale_border) | u32::from(settings.fill_interior) << 1,
+        u32::from(settings.rescale_border)
+            | u32::from(settings.fill_interior) << 1
+            | u32::from(settings.axis_correction) << 2,
         super::format::VERSION,
     ]
 }

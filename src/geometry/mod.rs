@@ -1,6 +1,7 @@
 //! Geometry every technique and the CPU reference share, with no rendering in it: a mesh's
 //! rest-pose data and its deformation into world space, world-space triangles, a BVH over them,
-//! closedness, and the integer hash behind every pseudo-random pattern.
+//! closedness, the share of ambient light a cone of directions blocks, and the integer hash
+//! behind every pseudo-random pattern.
 //!
 //! - [`rest_mesh`]: positions, normals, skin and morph targets copied out of a Bevy mesh once.
 //! - [`deform`]: the mesh in one pose (morph targets, then linear blend skinning), and the pose
@@ -8,9 +9,12 @@
 //! - [`triangles`]: world-space triangles of Bevy meshes.
 //! - [`bvh`]: a bounding volume hierarchy over triangles, for rays and nearest points.
 //! - [`closed`]: whether a triangle soup encloses a volume.
+//! - [`cap`]: the share of ambient light a cone of directions blocks (T_clip, sphere caps), as
+//!   `shaders/cap_occlusion.wgsl` evaluates it.
 //! - [`hash`]: the PCG hash, bit-identical on the CPU and in WGSL.
 
 pub mod bvh;
+pub mod cap;
 pub mod closed;
 pub mod deform;
 pub mod hash;

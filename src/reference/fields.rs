@@ -1,14 +1,15 @@
 //! AO field occlusion (Malmer et al. 2005, §3.2–3.3) on the CPU, exactly as `fields/fields.wgsl`
 //! evaluates it: trilinear interpolation between cell centres over the corners outside the
 //! object, the fade on the object's own surface and its own share beyond the near reach there,
-//! 2a or the clipped cone (T_clip, through [`cap_occlusion`]) per occluder, split into the near
+//! 2a or the clipped cone (T_clip, through [`cap_occlusion`], with its axis corrections) per
+//! occluder, split into the near
 //! field's share and the rest, visibilities multiplied.
 
 use bevy::math::{Affine3A, Vec3, Vec4};
 
-use super::cap::{cap_occlusion, share_beyond};
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::fields::AoFieldData;
+use crate::geometry::cap::{cap_occlusion, share_beyond};
 use crate::settings::FieldShading;
 
 /// The interpolated content of a field at one point.
@@ -24,6 +25,9 @@ pub struct FieldSample {
     pub signed_distance: f32,
     /// On the object's own surface, the share of its hemisphere blocked beyond the near reach.
     pub own_surface: f32,
+    /// The cone's errors on the axis hemispheres +x, −x, +y, −y, +z, −z within the reach, then
+    /// within the near reach ([`AoFieldData::axes`]).
+    pub axes: [f32; 12],
 }
 
 /// Own-surface grid points whose surface normal is this close to the receiver's count.
@@ -64,12 +68,18 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
             out.far += w * Vec4::from_array(field.cells[i]);
             out.near += w * Vec4::from_array(field.near_cells[i]);
             out.near_offset += w * Vec3::new(ox, oy, oz);
+            for (sum, value) in out.axes.iter_mut().zip(field.axes[i]) {
+                *sum += w * value;
+            }
         }
     }
     if outside > 0.0 {
         out.far /= outside;
         out.near /= outside;
         out.near_offset /= outside;
+        for sum in &mut out.axes {
+            *sum /= outside;
+        }
     }
     if facing > 0.0 {
         out.own_surface /= facing;
@@ -105,7 +115,21 @@ pub fn occluder_occlusion(
     let mesh_normal = (world_from_mesh.matrix3.transpose() * n).normalize_or_zero();
     let s = sample_field(field, uvw, mesh_normal);
     let fade = smoothstep(field.own_surface_fade(), s.signed_distance);
-    let cone = |c: Vec4| match shading {
+    // The axis corrections, weighted by the squared components of the mesh-space normal.
+    let correction = |axes: &[f32]| {
+        (0..3)
+            .map(|k| {
+                let c = mesh_normal[k];
+                c * c
+                    * if c >= 0.0 {
+                        axes[2 * k]
+                    } else {
+                        axes[2 * k + 1]
+                    }
+            })
+            .sum::<f32>()
+    };
+    let cone = |c: Vec4, axes: &[f32]| match shading {
         FieldShading::OcclusionOnly => (2.0 * c.x).min(1.0),
         FieldShading::Cone => {
             let axis = world_from_mesh.matrix3 * Vec3::new(c.y, c.z, c.w);
@@ -115,14 +139,15 @@ pub fn occluder_occlusion(
             } else {
                 0.0
             };
-            cap_occlusion(1.0 - 2.0 * c.x.clamp(0.0, 1.0), cos_beta)
+            (cap_occlusion(1.0 - 2.0 * c.x.clamp(0.0, 1.0), cos_beta) + correction(axes))
+                .clamp(0.0, 1.0)
         }
     };
-    let all = cone(s.far) * fade;
+    let all = cone(s.far, &s.axes[..6]) * fade;
     if near <= 0.0 {
         return [0.0, all];
     }
-    let inner = cone(s.near) * fade;
+    let inner = cone(s.near, &s.axes[6..]) * fade;
     let at = p + world_from_mesh.matrix3 * s.near_offset;
     [
         inner * (1.0 - held(at, 0.1 * near)),

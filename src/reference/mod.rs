@@ -1,7 +1,6 @@
 //! CPU reference: the plugin's formulas evaluated on the CPU, a BVH ray tracer for ground
 //! truth, image metrics and 16-bit PNG output. No GPU needed; tests, benchmarks and tools use it.
 //!
-//! - [`cap`]: the share of ambient light a cone of directions blocks (T_clip, sphere caps).
 //! - [`nd_buffer`]: an ND-buffer read back from the GPU and the camera that made it.
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
 //! - [`horizon`]: horizon-based AO (Bavoil & Sainz 2008) exactly as `horizon.wgsl` runs it.
@@ -9,14 +8,14 @@
 //! - [`fields`]: AO field occlusion exactly as `fields/fields.wgsl` evaluates it.
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
-//! - [`crate::geometry`] holds the triangles, BVH and hash these share with the plugin.
+//! - [`crate::geometry`] holds the triangles, BVH, hash and cap occlusion these share with the
+//!   plugin.
 //! - [`posed`]: the triangles a Bevy world draws this frame, skinned and morphed meshes posed.
 //! - [`ground_truth`]: ray-traced ambient occlusion, cosine-weighted over the hemisphere,
 //!   binary hits within a distance R, 1 = open (eq. 1 of the papers).
 //! - [`metrics`]: RMSE and mean bias between two AO images.
 //! - [`png16`]: 16-bit grayscale PNG files of visibility.
 
-pub mod cap;
 pub mod fields;
 pub mod filter;
 pub mod ground_truth;

@@ -7,8 +7,8 @@ use std::f32::consts::TAU;
 
 use bevy::math::{Mat3, Vec2, Vec3};
 
-use super::cap::{cap_occlusion, share_beyond};
 use super::nd_buffer::{NdBuffer, ViewMatrices};
+use crate::geometry::cap::{cap_occlusion, share_beyond};
 use crate::spheres::{OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
 
 /// √π / 2: half the side of the square with the area of the unit disk.

@@ -6,7 +6,7 @@
 // the clipped integral of Snyder (1996, "Area light sources for real-time graphics"); a cap wider
 // than a hemisphere is the whole sphere less the opposite cap. Malmer et al.'s T_clip (2005,
 // §3.3.1) is this function; sphere occluders use it for the cap of the sphere that lies within
-// reach. `reference::cap` is the CPU twin.
+// reach. `geometry::cap` is the CPU twin (the field baker uses it too).
 
 #define_import_path bevy_dynamic_ao::cap_occlusion
 

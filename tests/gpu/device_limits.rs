@@ -146,8 +146,8 @@ fn voxel_triangles_past_the_binding_limit_are_left_out_with_a_warning() {
     );
 }
 
-/// A field bakes at `resolution`³: 16³ cells take 262,144 bytes (the limit exactly), 32³
-/// 2,097,152.
+/// A field bakes at `resolution`³ cells of 112 bytes: 8³ take 57,344 bytes, 32³ 3,670,016 (the
+/// limit is 262,144).
 fn field(resolution: u32) -> AoField {
     AoField::Bake(BakeSettings {
         resolution,
@@ -188,9 +188,9 @@ fn a_field_past_the_binding_limit_casts_nothing_with_a_warning() {
             Transform::from_xyz(1.2, 0.3, -0.6),
         );
     let mut both = boxes.clone();
-    both.fields = vec![(2, field(16)), (3, field(32))];
+    both.fields = vec![(2, field(8)), (3, field(32))];
     let mut small_only = boxes;
-    small_only.fields = vec![(2, field(16))];
+    small_only.fields = vec![(2, field(8))];
 
     let limited = baked(
         Gpu::with_storage_binding_limit(&both, fields_only.clone(), LIMIT),
@@ -199,7 +199,7 @@ fn a_field_past_the_binding_limit_casts_nothing_with_a_warning() {
     .frame(4)
     .visibility;
     assert_logged_once(&[
-        "AoField: a field of 32768 cells (2097152 bytes) does not fit",
+        "AoField: a field of 32768 cells (3670016 bytes) does not fit",
         "max_storage_buffer_binding_size is 262144",
     ]);
     let expected = baked(Gpu::new(&small_only, fields_only), 1)
