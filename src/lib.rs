@@ -87,7 +87,8 @@
 //! `src/shaders/` holds the WGSL every pass imports (ND-buffer reads, sampling, cap and proxy
 //! occlusion, Wendland's kernel). Production code never imports `reference`.
 //!
-//! Where each paper's equations live (the CPU twin of each shader is in `reference/`):
+//! Where each paper's equations live (the CPU twin of each shader is in `reference/`; that of
+//! `shaders/cap_occlusion.wgsl`, which the field baker uses too, in `geometry/cap.rs`):
 //!
 //! | paper | equation | file |
 //! | --- | --- | --- |
@@ -96,8 +97,9 @@
 //! | | eq. 2–4, near field | `near_field/near_field.wgsl` |
 //! | | §5.2 splatting, eq. 5 d_far | `spheres/splat.wgsl`, `spheres/component.rs` (`far_field_reach`) |
 //! | | §5.3 refit | `spheres/refit.rs` |
-//! | Malmer et al. 2005 | §3.1 baking | `fields/baker.rs` |
-//! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` |
+//! | Malmer et al. 2005 | §3.1 baking | `fields/baker/mod.rs` |
+//! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` (T_clip's axis corrections, not in the paper: `fields/baker/axes.rs`) |
+//! | | §3.4 border rescale, interior fill | `fields/baker/paper.rs` |
 //! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
 //! | | ray-marched AO | `ray_march/ray_march.wgsl` |
 //! | | cross-bilateral blur | `filter/blur.wgsl` |
