@@ -3,9 +3,12 @@
 0.25 m with bumps of 15 % of it, 250 x 120 segments) on a 10 m floor quad, and a camera at
 (2, 1.6, 2.4) looking at (0, 0.3, 0) with a vertical field of view of 0.8 rad: a concave,
 finely detailed object on a floor of zero thickness, for `ao_capture --out-truth`
-(BENCHMARKS.md, "A bumpy ring on a floor"). Standard library only.
+(BENCHMARKS.md, "A bumpy ring on a floor"). With `--blob`, the same floor and camera with a
+bumpy ball of 60,000 triangles (radius 0.45 m, normals from its faces) resting on the floor and a
+1.6 x 1.1 m slab 8 cm thick beside it, reaching out of the view. Standard library only.
 
     python3 docs/ring_on_floor.py /tmp/ring_on_floor.glb
+    python3 docs/ring_on_floor.py /tmp/blob_and_slab.glb --blob
 """
 import json
 import math
@@ -34,6 +37,59 @@ def ring(major, tube, nu, nv):
     return positions, normals, indices
 
 
+def blob(radius, nu, nv):
+    positions, normals, indices = [], [], []
+    for i in range(nu + 1):
+        th = math.pi * i / nu
+        for j in range(nv):
+            ph = 2 * math.pi * j / nv
+            r = radius * (1 + 0.08 * math.sin(9 * th) * math.cos(11 * ph) + 0.04 * math.sin(23 * ph + 5 * th))
+            n = (math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph))
+            positions.append((r * n[0], r * n[1] + radius * 0.92, r * n[2]))
+            normals.append(n)
+    for i in range(nu):
+        for j in range(nv):
+            a = i * nv + j
+            b = (i + 1) * nv + j
+            c = (i + 1) * nv + (j + 1) % nv
+            d = i * nv + (j + 1) % nv
+            indices += [a, b, d, d, b, c]
+    acc = [[0.0, 0.0, 0.0] for _ in positions]
+    for t in range(0, len(indices), 3):
+        ia, ib, ic = indices[t:t + 3]
+        pa, pb, pc = positions[ia], positions[ib], positions[ic]
+        e1 = [pb[k] - pa[k] for k in range(3)]
+        e2 = [pc[k] - pa[k] for k in range(3)]
+        fn = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]]
+        for v in (ia, ib, ic):
+            for k in range(3):
+                acc[v][k] += fn[k]
+    normals = []
+    for v, a in enumerate(acc):
+        n = math.sqrt(sum(c * c for c in a)) or 1.0
+        normals.append(tuple(c / n for c in a))
+    # Face normals of the winding above point inwards: turn normals and winding outwards.
+    cx = (0.0, 0.45 * 0.92, 0.0)
+    flip = sum((positions[v][k] - cx[k]) * normals[v][k] for v in range(0, len(positions), 97) for k in range(3)) < 0
+    if flip:
+        normals = [tuple(-c for c in n) for n in normals]
+        indices = [indices[t + k] for t in range(0, len(indices), 3) for k in (0, 2, 1)]
+    return positions, normals, indices
+
+
+def slab(cx, cz, w, h, t):
+    x0, x1, z0, z1 = cx - t / 2, cx + t / 2, cz - w / 2, cz + w / 2
+    faces = [((1,0,0), [(x1,0,z0),(x1,h,z0),(x1,h,z1),(x1,0,z1)]), ((-1,0,0), [(x0,0,z1),(x0,h,z1),(x0,h,z0),(x0,0,z0)]),
+             ((0,0,1), [(x0,0,z1),(x1,0,z1),(x1,h,z1),(x0,h,z1)]), ((0,0,-1), [(x1,0,z0),(x0,0,z0),(x0,h,z0),(x1,h,z0)]),
+             ((0,1,0), [(x0,h,z0),(x0,h,z1),(x1,h,z1),(x1,h,z0)]), ((0,-1,0), [(x0,0,z0),(x1,0,z0),(x1,0,z1),(x0,0,z1)])]
+    positions, normals, indices = [], [], []
+    for n, quad in faces:
+        k = len(positions)
+        positions += quad; normals += [n] * 4
+        indices += [k, k + 1, k + 2, k, k + 2, k + 3]
+    return positions, normals, indices
+
+
 def look_rotation(eye, target):
     """Quaternion (x, y, z, w) turning -Z towards target, +Y up."""
     f = [t - e for t, e in zip(target, eye)]
@@ -48,7 +104,7 @@ def look_rotation(eye, target):
     return [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, s / 4]
 
 
-def main(path):
+def main(path, blob_scene=False):
     data, views, accessors = bytearray(), [], []
 
     def add(values, fmt, kind, component, target, bounds=False):
@@ -73,18 +129,21 @@ def main(path):
 
     floor = ([(-5, 0, -5), (5, 0, -5), (5, 0, 5), (-5, 0, 5)], [(0, 1, 0)] * 4, [0, 2, 1, 0, 3, 2])
     eye = (2.0, 1.6, 2.4)
+    if blob_scene:
+        objects = [("blob", blob(0.45, 150, 200)), ("slab", slab(-1.15, -0.3, 1.6, 1.1, 0.08))]
+    else:
+        objects = [("ring", ring(0.6, 0.25, 250, 120))]
+    objects.append(("floor", floor))
+    nodes = [{"mesh": k, "name": name} for k, (name, _) in enumerate(objects)]
+    nodes.append({"camera": 0, "translation": list(eye), "rotation": look_rotation(eye, (0.0, 0.3, 0.0))})
     gltf = {
         "asset": {"version": "2.0"},
         "scene": 0,
-        "scenes": [{"nodes": [0, 1, 2]}],
-        "nodes": [
-            {"mesh": 0, "name": "ring"},
-            {"mesh": 1, "name": "floor"},
-            {"camera": 0, "translation": list(eye), "rotation": look_rotation(eye, (0.0, 0.3, 0.0))},
-        ],
+        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
         "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}}],
         "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0]}}],
-        "meshes": [mesh(*ring(0.6, 0.25, 250, 120)), mesh(*floor)],
+        "meshes": [mesh(*geometry) for _, geometry in objects],
         "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": len(data)}],
@@ -99,4 +158,5 @@ def main(path):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "ring_on_floor.glb")
+    paths = [a for a in sys.argv[1:] if a != "--blob"]
+    main(paths[0] if paths else "ring_on_floor.glb", "--blob" in sys.argv[1:])

@@ -49,8 +49,9 @@ pub const RSS_GROWTH_BOUND: u64 = 8 << 20;
 /// Growth past which the run stops rather than exhaust the machine's memory, bytes.
 const RSS_STOP: u64 = 4 << 30;
 /// Most GPU bytes the plugin may hold at any checkpoint: the run's largest state (a 32³ voxel
-/// grid, six small fields, the temporal histories of an 80×60 view) takes about 0.2 MB.
-pub const GPU_BYTES_BOUND: u64 = 256 << 10;
+/// grid, six small fields of 112 bytes per cell, the temporal histories of an 80×60 view) took
+/// 292,016 bytes in the 10,000-frame run and 264,368 in CI's 1,000 frames.
+pub const GPU_BYTES_BOUND: u64 = 320 << 10;
 
 /// What a run's memory did.
 pub struct Verdict {
