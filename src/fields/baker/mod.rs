@@ -25,10 +25,12 @@ use crate::settings::{DEFAULT_NEAR_FIELD_RADIUS, DEFAULT_RADIUS};
 mod axes;
 mod own_surface;
 mod paper;
+mod sample;
 
 use axes::AxisHemispheres;
-use own_surface::{OwnSurface, beyond_near, cosine_hemisphere};
+use own_surface::{OwnSurface, cosine_hemisphere};
 pub use paper::{fill_interior, rescale_border};
+use sample::{Cell, SampleDistances, sample};
 
 /// How far a field's occlusion reaches, which also sets its grid's extent.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
@@ -329,7 +331,11 @@ pub fn bake(
         skip: !(near.is_finite() && near < reach),
     };
     let origin = center - half_extent;
-    let miss = 2.0 * half_extent.length();
+    let distances = SampleDistances {
+        reach,
+        near,
+        miss: 2.0 * half_extent.length(),
+    };
 
     let (nx, ny, nz) = (
         resolution.x as usize,
@@ -347,15 +353,15 @@ pub fn bake(
             chunks[z % threads].push((z, chunk));
         }
         for work in chunks {
-            let (bvh, directions, done, own, axes) = (&bvh, &directions, &done, &own, &axes);
+            let (bvh, directions, done, own, axes, distances) =
+                (&bvh, &directions, &done, &own, &axes, &distances);
             scope.spawn(move || {
                 for (z, chunk) in work {
                     for y in 0..ny {
                         for x in 0..nx {
                             let p = origin
                                 + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * cell_size;
-                            chunk[y * nx + x] =
-                                sample(bvh, directions, own, axes, p, reach, near, miss);
+                            chunk[y * nx + x] = sample(bvh, directions, own, axes, p, distances);
                         }
                     }
                     progress(done.fetch_add(1, Ordering::Relaxed) + 1, nz);
@@ -390,110 +396,6 @@ pub fn bake(
         rescale_border(&mut field);
     }
     Ok(field)
-}
-
-/// What one grid point stores.
-#[derive(Clone, Copy, Default)]
-struct Cell {
-    far: [f32; 4],
-    near: [f32; 4],
-    signed_distance: f32,
-    near_offset: Vec3,
-    own_surface: [f32; 4],
-    axes: [f32; 12],
-}
-
-/// Occlusion (eq. 2: the blocked fraction of all directions) and average occluded direction at
-/// `p`, for hits within `reach` and within `near`; the signed distance to the surface (the
-/// nearest hit, negative where most hits meet back faces: inside a closed object or behind a
-/// one-sided one; `miss` where nothing is hit) and the mean offset to the near hits: a point on
-/// (or within) the part of the object the near rays meet. Outside the object and within
-/// `own.within` of its surface, the nearest hit stands for the nearest surface point, and its
-/// hemisphere on this point's side is sampled beyond the near reach ([`beyond_near`]).
-#[allow(clippy::too_many_arguments)]
-fn sample(
-    bvh: &Bvh,
-    directions: &[Vec3],
-    own: &OwnSurface,
-    axes: &AxisHemispheres,
-    p: Vec3,
-    reach: f32,
-    near: f32,
-    miss: f32,
-) -> Cell {
-    let (mut far_count, mut near_count) = (0u32, 0u32);
-    let (mut far_sum, mut near_sum) = (Vec3::ZERO, Vec3::ZERO);
-    let (mut far_axes, mut near_axes) = ([0.0f32; 6], [0.0f32; 6]);
-    let (mut nearest, mut near_offset, mut back, mut front) =
-        (f32::INFINITY, Vec3::ZERO, 0u32, 0u32);
-    // The nearest hit's point and its triangle's unit normal turned towards `p`.
-    let mut nearest_surface = (Vec3::ZERO, Vec3::ZERO);
-    for &d in directions {
-        let Some(hit) = bvh.closest_hit(p, d, 0.0, f32::INFINITY) else {
-            continue;
-        };
-        let normal = bvh.triangles()[hit.triangle]
-            .face_normal()
-            .normalize_or_zero();
-        if hit.t < nearest {
-            nearest = hit.t;
-            let side = if normal.dot(d) > 0.0 { -normal } else { normal };
-            nearest_surface = (p + d * hit.t, side);
-        }
-        if normal.dot(d) > 0.0 {
-            back += 1;
-        } else {
-            front += 1;
-        }
-        if hit.t < reach {
-            far_count += 1;
-            far_sum += d;
-            AxisHemispheres::add(&mut far_axes, d);
-        }
-        if hit.t < near {
-            near_count += 1;
-            near_sum += d;
-            near_offset += d * hit.t;
-            AxisHemispheres::add(&mut near_axes, d);
-        }
-    }
-    let rays = directions.len() as f32;
-    let cone = |count: u32, sum: Vec3| {
-        let d = sum.normalize_or_zero();
-        [count as f32 / rays, d.x, d.y, d.z]
-    };
-    let (far, near_cone) = (cone(far_count, far_sum), cone(near_count, near_sum));
-    let far_error = axes.cone_error(&far_axes, far);
-    let near_error = axes.cone_error(&near_axes, near_cone);
-    let distance = if nearest.is_finite() { nearest } else { miss };
-    let (at, side) = nearest_surface;
-    // Points inside the object are never read: the lookup takes the grid points outside (a
-    // point inside a box, under its bottom face, would see the box's inside from there).
-    let inside = back > front;
-    let own_surface = if own.skip || inside || nearest > own.within || side == Vec3::ZERO {
-        [0.0; 4]
-    } else {
-        let share = beyond_near(bvh, own.hemisphere, at, side, near, reach);
-        [share, side.x, side.y, side.z]
-    };
-    Cell {
-        far,
-        near: near_cone,
-        axes: std::array::from_fn(|k| {
-            if k < 6 {
-                far_error[k]
-            } else {
-                near_error[k - 6]
-            }
-        }),
-        signed_distance: if back > front { -distance } else { distance },
-        near_offset: if near_count > 0 {
-            near_offset / near_count as f32
-        } else {
-            Vec3::ZERO
-        },
-        own_surface,
-    }
 }
 
 #[cfg(test)]
