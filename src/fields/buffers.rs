@@ -16,7 +16,7 @@ use bevy::render::{
 };
 use bytemuck::{Pod, Zeroable};
 
-use super::format::AoFieldData;
+use super::format::{AoFieldData, CELL_FLOATS};
 use super::systems::ActiveAoField;
 use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
@@ -81,7 +81,7 @@ impl FieldInstance {
 }
 
 /// `vec4<f32>` per cell on the GPU (`fields.wgsl` reads them at this stride).
-const CELL_VEC4S: usize = 7;
+const CELL_VEC4S: usize = CELL_FLOATS / 4;
 /// Bytes one cell takes on the GPU.
 const CELL_BYTES: usize = CELL_VEC4S * 16;
 
@@ -188,24 +188,10 @@ pub(crate) fn extract_fields(
             buffers
                 .layout
                 .push((id, (buffers.cells.len() / CELL_VEC4S) as u32));
-            for ((((far, near), distances), own), axes) in field
-                .cells
-                .iter()
-                .zip(&field.near_cells)
-                .zip(&field.distances)
-                .zip(&field.own_surface)
-                .zip(&field.axes)
-            {
-                let axis = |k: usize| Vec4::new(axes[k], axes[k + 1], axes[k + 2], axes[k + 3]);
-                buffers.cells.extend([
-                    Vec4::from_array(*far),
-                    Vec4::from_array(*near),
-                    Vec4::from_array(*distances),
-                    Vec4::from_array(*own),
-                    axis(0),
-                    axis(4),
-                    axis(8),
-                ]);
+            for values in field.cell_values() {
+                buffers
+                    .cells
+                    .extend(values.chunks_exact(4).map(Vec4::from_slice));
             }
         }
         if buffers.cells.is_empty() {

@@ -25,8 +25,8 @@ pub const VERSION: u32 = 4;
 /// Largest grid resolution per axis.
 pub const MAX_RESOLUTION: u32 = 256;
 const HEADER_BYTES: usize = 8 + 4 + 12 + 12 + 12 + 8;
-/// Floats per cell in the file.
-const CELL_FLOATS: usize = 28;
+/// Floats per cell, in the file and on the GPU, in the order [`AoFieldData::cell_values`] gives.
+pub(crate) const CELL_FLOATS: usize = 28;
 const CHECKSUM_BYTES: usize = 8;
 
 /// A baked ambient occlusion field (Malmer et al. 2005): per grid cell, the fraction of the
@@ -165,6 +165,27 @@ impl AoFieldData {
         ((z * self.resolution.y + y) * self.resolution.x + x) as usize
     }
 
+    /// Every cell's values in the order the file and the GPU buffer hold them: far occlusion and
+    /// direction, near occlusion and direction, distances, own surface, axis corrections.
+    pub fn cell_values(&self) -> impl Iterator<Item = [f32; CELL_FLOATS]> + '_ {
+        (0..self.cells.len()).map(|i| {
+            let mut values = [0.0; CELL_FLOATS];
+            let parts: [&[f32]; 5] = [
+                &self.cells[i],
+                &self.near_cells[i],
+                &self.distances[i],
+                &self.own_surface[i],
+                &self.axes[i],
+            ];
+            let mut at = 0;
+            for part in parts {
+                values[at..at + part.len()].copy_from_slice(part);
+                at += part.len();
+            }
+            values
+        })
+    }
+
     /// The file bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut bytes =
@@ -183,21 +204,8 @@ impl AoFieldData {
         {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
-        for ((((cell, near), distances), own), axes) in self
-            .cells
-            .iter()
-            .zip(&self.near_cells)
-            .zip(&self.distances)
-            .zip(&self.own_surface)
-            .zip(&self.axes)
-        {
-            for v in cell
-                .iter()
-                .chain(near)
-                .chain(distances)
-                .chain(own)
-                .chain(axes)
-            {
+        for values in self.cell_values() {
+            for v in values {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
