@@ -69,6 +69,10 @@ fn configurations() -> Vec<Configuration> {
             },
         ),
         ours("ours, preset low", DynamicAo::from_preset(AoPreset::Low)),
+        ours(
+            "ours, preset medium",
+            DynamicAo::from_preset(AoPreset::Medium),
+        ),
         ours("Bevy SSAO High", bevy.clone()),
         Configuration {
             taa: true,
