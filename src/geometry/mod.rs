@@ -8,7 +8,7 @@
 //!   a Bevy world draws it in this frame.
 //! - [`triangles`]: world-space triangles of Bevy meshes.
 //! - [`bvh`]: a bounding volume hierarchy over triangles, for rays and nearest points.
-//! - [`closed`]: whether a triangle soup encloses a volume.
+//! - [`closed`]: whether a triangle soup encloses a volume (within a rounding, or exactly).
 //! - [`cap`]: the share of ambient light a cone of directions blocks (T_clip, sphere caps), as
 //!   `shaders/cap_occlusion.wgsl` evaluates it.
 //! - [`hash`]: the PCG hash, bit-identical on the CPU and in WGSL.

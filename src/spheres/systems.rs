@@ -19,7 +19,7 @@ use super::component::{OccluderSpheres, ProxyShape, SphereOccluder};
 use super::fit::fit_boxes;
 use super::lloyd::{ClusteredMesh, cluster};
 use super::refit::refit;
-use crate::geometry::closed::is_closed;
+use crate::geometry::closed::encloses_volume;
 use crate::geometry::deform::{Pose, mesh_morph_weights, skin_joints};
 use crate::geometry::rest_mesh::{RestMesh, RestMeshError};
 
@@ -102,7 +102,7 @@ fn fit(mesh: RestMesh, count: u32, shape: ProxyShape) -> Arc<FittedMesh> {
     };
     let clusterable_vertices = mesh.areas.iter().filter(|a| **a > 0.0).count();
     let solid_parts = clustered.spheres.len() > 1
-        && is_closed(
+        && encloses_volume(
             mesh.triangles
                 .iter()
                 .map(|t| t.map(|i| mesh.positions[i as usize])),

@@ -92,8 +92,9 @@ pub fn procedural() -> Vec<FarScene> {
     ]
 }
 
-/// A closed ring (major radius 0.6 m, tube 0.25 m) on the floor, seen from above its rim: one
-/// rigid mesh whose box proxies stand one behind another as the floor around it sees them.
+/// A ring (Bevy's `Torus`, major radius 0.6 m, tube 0.25 m) on the floor, seen from above its
+/// rim: one rigid mesh that encloses a volume (its seams' vertices a rounding apart) and whose
+/// box proxies stand one behind another as the floor around it sees them.
 pub fn ring_on_floor() -> FarScene {
     plain(
         "ring on floor",
@@ -101,45 +102,14 @@ pub fn ring_on_floor() -> FarScene {
             Transform::from_xyz(2.0, 1.6, 2.4).looking_at(Vec3::new(0.0, 0.3, 0.0), Vec3::Y),
         )
         .with(floor(), Transform::IDENTITY)
-        .with(ring(0.6, 0.25), Transform::from_xyz(0.0, 0.25, 0.0)),
+        .with(
+            Torus::new(0.35, 0.85)
+                .mesh()
+                .minor_resolution(32)
+                .major_resolution(96),
+            Transform::from_xyz(0.0, 0.25, 0.0),
+        ),
     )
-}
-
-/// A closed torus around the y axis, its vertices shared across the seams (Bevy's `Torus` mesh
-/// repeats them at positions a rounding apart, so it is not closed): `major` and `minor` radii,
-/// metres.
-fn ring(major: f32, minor: f32) -> Mesh {
-    let (around, across) = (96u32, 32u32);
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    for i in 0..around {
-        let u = std::f32::consts::TAU * i as f32 / around as f32;
-        for j in 0..across {
-            let v = std::f32::consts::TAU * j as f32 / across as f32;
-            let n = Vec3::new(v.cos() * u.cos(), v.sin(), v.cos() * u.sin());
-            positions.push([
-                (major + minor * v.cos()) * u.cos(),
-                minor * v.sin(),
-                (major + minor * v.cos()) * u.sin(),
-            ]);
-            normals.push(n.to_array());
-        }
-    }
-    let mut indices = Vec::new();
-    for i in 0..around {
-        for j in 0..across {
-            let at = |i: u32, j: u32| (i % around) * across + j % across;
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            indices.extend_from_slice(&[a, d, b, b, d, c]);
-        }
-    }
-    Mesh::new(
-        bevy::mesh::PrimitiveTopology::TriangleList,
-        bevy::asset::RenderAssetUsages::default(),
-    )
-    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
-    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, normals)
-    .with_inserted_indices(bevy::mesh::Indices::U32(indices))
 }
 
 /// The project's own skinned walker (`assets/characters/walker.glb`), mid-stride on a floor.
