@@ -7,7 +7,7 @@ use bevy::platform::collections::HashMap;
 /// [`encloses_volume`]. Meshes split vertices along hard edges and texture seams; where a seam's
 /// copies are computed from different angles (0 and 2π in Bevy's UV sphere, torus and cylinder)
 /// they differ in the last bits.
-const WELD_TOLERANCE: f32 = 1e-5;
+pub const WELD_TOLERANCE: f32 = 1e-5;
 
 /// Whether every edge of a triangle soup, with vertices at exactly the same position welded,
 /// belongs to exactly two triangles: what the voxel grid's parity fill needs, whose rule counts
