@@ -31,7 +31,8 @@ pub(crate) struct FieldInstance {
     world_from_mesh: [Vec4; 3],
     resolution: [u32; 3],
     offset: u32,
-    /// x: where the fade of the object's own surface ends, mesh units (half a cell).
+    /// x: where the fade of the object's own surface ends, mesh units (half a cell); yzw: grid
+    /// units per mesh unit along each axis, for the signed distance's gradient.
     params: Vec4,
     /// xy: the occluder's `RenderLayers` as bits (see [`layer_bits`]).
     layers: UVec4,
@@ -64,6 +65,7 @@ impl FieldInstance {
         );
         let grid_from_world = grid_from_box * world_from_box.inverse();
         let m = world_from_mesh.matrix3;
+        let grid_scale = field.resolution.as_vec3() / (2.0 * field.half_extent);
         Some(Self {
             world_from_box: Mat4::from(world_from_box),
             grid_from_world: Mat4::from(grid_from_world),
@@ -74,7 +76,12 @@ impl FieldInstance {
             ],
             resolution: field.resolution.to_array(),
             offset,
-            params: Vec4::new(field.own_surface_fade(), 0.0, 0.0, 0.0),
+            params: Vec4::new(
+                field.own_surface_fade(),
+                grid_scale.x,
+                grid_scale.y,
+                grid_scale.z,
+            ),
             layers: layer_bits(layers).extend(0).extend(0),
         })
     }

@@ -4,7 +4,8 @@
 // occluded direction d trilinearly, from grid points outside the object only (their signed
 // distance is positive), so that a point on a thin object never mixes values from its two sides.
 // The object's own surface gets only what lies beyond the near field's reach: the occlusion fades
-// out over the half cell next to it, by the interpolated signed distance, and the near field
+// out over the half cell next to it, by the interpolated signed distance, where the receiver
+// faces the way the surface there does (other surfaces touching the object keep all of it), and the near field
 // shades that surface within its reach; beyond it, the share the grid points next to the surface
 // baked over their nearest surface point's hemisphere fades in, from the points whose surface
 // faces the way the receiver does (so a thin object's two sides stay apart). a and d become the
@@ -32,7 +33,8 @@ struct FieldInstance {
     // Cells per axis, and the first cell in `cells` (each cell is seven vec4).
     resolution: vec3<u32>,
     offset: u32,
-    // x: how far from the object's surface its own surface's fade ends, mesh units.
+    // x: how far from the object's surface its own surface's fade ends, mesh units; yzw: grid
+    // units per mesh unit along each axis (resolution / box size).
     params: vec4<f32>,
     // xy: the occluder's RenderLayers as bits (`seen_by_view`).
     layers: vec4<u32>,
@@ -91,6 +93,10 @@ struct FieldSample {
     signed_distance: f32,
     // On the object's own surface, the share of its hemisphere blocked beyond the near reach.
     own_surface: f32,
+    // How far the receiver lies along the object's surface there: 1 where its normal is the
+    // surface's (either side, the signed distance's gradient), 0 where it stands across it (a
+    // wall standing on a floor).
+    facing: f32,
     // The cone's errors on the axis hemispheres +x, +y, +z and −x, −y, −z, within R and within
     // the near field's reach.
     far_positive: vec3<f32>,
@@ -101,6 +107,11 @@ struct FieldSample {
 
 // Own-surface grid points whose surface normal is this close to the receiver's count.
 const SAME_SIDE: f32 = 0.5;
+// The receiver lies along the object's surface (its own) where the cosine between its normal and
+// the surface's is above ALONG, and across it (another surface touching the object) below
+// SIDEWAYS; a smooth step between.
+const SIDEWAYS: f32 = 0.3;
+const ALONG: f32 = 0.7;
 
 // Trilinear interpolation between cell centres, clamped at the outer cells, over the corners
 // outside the object (the signed distance over all eight; the own surface's share over those
@@ -117,12 +128,15 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     out.near_offset = vec3<f32>(0.0);
     out.signed_distance = 0.0;
     out.own_surface = 0.0;
+    out.facing = 0.0;
     out.far_positive = vec3<f32>(0.0);
     out.far_negative = vec3<f32>(0.0);
     out.near_positive = vec3<f32>(0.0);
     out.near_negative = vec3<f32>(0.0);
     var outside = 0.0;
     var facing = 0.0;
+    // The signed distance's gradient, per grid unit.
+    var gradient = vec3<f32>(0.0);
     for (var corner = 0u; corner < 8u; corner++) {
         let pick = vec3<bool>((corner & 1u) != 0u, (corner & 2u) != 0u, (corner & 4u) != 0u);
         let c = select(i0, i1, pick);
@@ -132,10 +146,14 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
         let distances = cells[at + 2u];
         out.signed_distance += w * distances.x;
         let own = cells[at + 3u];
-        if dot(own.yzw, n) > SAME_SIDE {
+        let same_side = dot(own.yzw, n) > SAME_SIDE;
+        if same_side {
             facing += w;
             out.own_surface += w * own.x;
         }
+        // d w / d g per axis: the corner's weight along the two other axes, signed by its side.
+        let side = select(vec3<f32>(-1.0), vec3<f32>(1.0), pick);
+        gradient += distances.x * side * vec3<f32>(w3.y * w3.z, w3.x * w3.z, w3.x * w3.y);
         if distances.x > 0.0 {
             outside += w;
             out.far += w * cells[at];
@@ -163,6 +181,12 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     if facing > 0.0 {
         out.own_surface /= facing;
     }
+    // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis, so the
+    // gradient scales by resolution / extent (the grid box's world_from_box holds the extent;
+    // grid_from_world's rows give its inverse).
+    let per_mesh = gradient * field.params.yzw;
+    let length2 = dot(per_mesh, per_mesh);
+    out.facing = select(1.0, smoothstep(SIDEWAYS, ALONG, abs(dot(per_mesh, n)) * inverseSqrt(length2)), length2 > 1e-20);
     return out;
 }
 
@@ -211,7 +235,9 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     let n_mesh = normalize(normal * m);
     let s = sample_field(field, uvw, n_mesh);
     // Nothing from the field on the object's own surface, fading in over the half cell next to it.
-    let fade = smoothstep(0.0, field.params.x, s.signed_distance);
+    // Only the object's own surface fades: another object's surface that touches it (a wall
+    // standing on a floor) faces another way and gets the field's full value there.
+    let fade = 1.0 - s.facing * (1.0 - smoothstep(0.0, field.params.x, s.signed_distance));
     let all = cone_occlusion(field, s.far.x, s.far.yzw, normal, n_mesh, s.far_positive, s.far_negative) * fade;
     let near = settings.near_field_radius;
     if near <= 0.0 {

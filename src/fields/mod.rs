@@ -32,7 +32,12 @@
 //!   0.4–0.6. Grid points store their signed distance to the object; the lookup interpolates only
 //!   points outside it (no interior fill needed) and fades the field out over the half cell next
 //!   to the object, so the object's own surface is left to the near field: an open floor with its
-//!   own field reads 1.
+//!   own field reads 1. Only receivers that lie along the surface there fade (their normal within
+//!   about 45° of the signed distance's gradient, either side): another object's surface that
+//!   touches this one (a slab standing on a floor with a field) stands across it and keeps the
+//!   field's full value, where the fade left a bright band half a cell wide along the contact (a
+//!   bumpy ball and a slab on a floor, the default joined to fields: RMSE 0.0405 → 0.0390 at
+//!   R = 2 m, 0.0451 → 0.0448 at 0.75 m).
 //! - **Its own surface beyond the near field's reach.** Under count-once the near field reaches
 //!   only [`near_field_radius`](crate::DynamicAo::near_field_radius) (0.5 m), so a concave
 //!   object's occlusion of itself beyond that (a ring's far side across its hole) was counted by

@@ -1,6 +1,7 @@
 //! AO field occlusion (Malmer et al. 2005, §3.2–3.3) on the CPU, exactly as `fields/fields.wgsl`
 //! evaluates it: trilinear interpolation between cell centres over the corners outside the
-//! object, the fade on the object's own surface and its own share beyond the near reach there,
+//! object, the fade on the object's own surface (where the receiver faces the way it does) and its
+//! own share beyond the near reach there,
 //! 2a or the clipped cone (T_clip, through [`cap_occlusion`], with its axis corrections) per
 //! occluder, split into the near
 //! field's share and the rest, visibilities multiplied.
@@ -25,6 +26,10 @@ pub struct FieldSample {
     pub signed_distance: f32,
     /// On the object's own surface, the share of its hemisphere blocked beyond the near reach.
     pub own_surface: f32,
+    /// How far the receiver lies along the object's surface there: 1 where its normal is the
+    /// surface's (either side, the signed distance's gradient), 0 where it stands across it (a
+    /// wall standing on a floor).
+    pub facing: f32,
     /// The cone's errors on the axis hemispheres +x, −x, +y, −y, +z, −z within the reach, then
     /// within the near reach ([`AoFieldData::axes`]).
     pub axes: [f32; 12],
@@ -32,6 +37,11 @@ pub struct FieldSample {
 
 /// Own-surface grid points whose surface normal is this close to the receiver's count.
 const SAME_SIDE: f32 = 0.5;
+/// The receiver lies along the object's surface (its own) where the cosine between its normal and
+/// the surface's is above `ALONG`, and across it (another surface touching the object) below
+/// `SIDEWAYS`; a smooth step between.
+const SIDEWAYS: f32 = 0.3;
+const ALONG: f32 = 0.7;
 
 /// `field` at grid coordinates `uvw` ∈ [0, 1]³, for a receiver with mesh-space unit normal `n`.
 pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
@@ -42,6 +52,8 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
     let f = g - i0.as_vec3();
     let mut out = FieldSample::default();
     let (mut outside, mut facing) = (0.0, 0.0);
+    // The signed distance's gradient, per grid unit.
+    let mut gradient = Vec3::ZERO;
     for corner in 0..8u32 {
         let pick = |bit: u32| corner & bit != 0;
         let c = [
@@ -59,10 +71,19 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
         let [signed, ox, oy, oz] = field.distances[i];
         out.signed_distance += w * signed;
         let [own, sx, sy, sz] = field.own_surface[i];
-        if Vec3::new(sx, sy, sz).dot(n) > SAME_SIDE {
+        let same_side = Vec3::new(sx, sy, sz).dot(n) > SAME_SIDE;
+        if same_side {
             facing += w;
             out.own_surface += w * own;
         }
+        // d w / d g per axis: the corner's weight along the two other axes, signed by its side.
+        let side = |bit: u32| if pick(bit) { 1.0 } else { -1.0 };
+        gradient += signed
+            * Vec3::new(
+                side(1) * w3[1] * w3[2],
+                side(2) * w3[0] * w3[2],
+                side(4) * w3[0] * w3[1],
+            );
         if signed > 0.0 {
             outside += w;
             out.far += w * Vec4::from_array(field.cells[i]);
@@ -84,7 +105,18 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
     if facing > 0.0 {
         out.own_surface /= facing;
     }
+    // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis.
+    let normal = (gradient * r / (2.0 * field.half_extent)).normalize_or_zero();
+    out.facing = if normal == Vec3::ZERO {
+        1.0
+    } else {
+        smoothstep_between(SIDEWAYS, ALONG, normal.dot(n).abs())
+    };
     out
+}
+
+fn smoothstep_between(low: f32, high: f32, x: f32) -> f32 {
+    smoothstep(high - low, x - low)
 }
 
 fn smoothstep(edge: f32, x: f32) -> f32 {
@@ -114,7 +146,8 @@ pub fn occluder_occlusion(
     }
     let mesh_normal = (world_from_mesh.matrix3.transpose() * n).normalize_or_zero();
     let s = sample_field(field, uvw, mesh_normal);
-    let fade = smoothstep(field.own_surface_fade(), s.signed_distance);
+    // Only the object's own surface fades; another surface touching it keeps the full value.
+    let fade = 1.0 - s.facing * (1.0 - smoothstep(field.own_surface_fade(), s.signed_distance));
     // The axis corrections, weighted by the squared components of the mesh-space normal.
     let correction = |axes: &[f32]| {
         (0..3)

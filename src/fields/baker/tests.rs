@@ -424,3 +424,45 @@ fn the_own_surface_gets_its_share_beyond_the_near_reach_on_its_side_only() {
     let field = bake(channel(), &settings, &|_, _| {}).unwrap();
     assert!(field.own_surface.iter().all(|c| *c == [0.0; 4]));
 }
+
+/// A surface that stands across the object next to it (a shelf touching a wall, a slab on a
+/// floor) gets the field's full value there, as a ray tracer finds it; the object's own surface
+/// at the same point fades, and the shelf once faded with it.
+#[test]
+fn a_surface_touching_the_object_across_it_keeps_the_full_value() {
+    use crate::reference::fields::occluder_occlusion;
+    use crate::settings::FieldShading;
+    let wall: Vec<Triangle> = channel().into_iter().take(2).collect();
+    let settings = BakeSettings {
+        resolution: 24,
+        rays: 512,
+        reach: FieldReach::Distance {
+            reach: 1.0,
+            near: 0.3,
+        },
+        ..default()
+    };
+    let field = bake(wall.clone(), &settings, &|_, _| {}).unwrap();
+    let lookup = |p: Vec3, n: Vec3| {
+        occluder_occlusion(
+            &field,
+            Affine3A::IDENTITY,
+            p,
+            n,
+            FieldShading::Cone,
+            0.0,
+            &|_, _| 0.0,
+        )[1]
+    };
+    // A quarter of the fade's width off the wall, where the fade alone kept 16 %.
+    let p = Vec3::new(0.25 * field.own_surface_fade(), 0.5, 0.1);
+    let truth = brute_force_beyond(&wall, p, Vec3::Y, 0.0, 1.0);
+    let shelf = lookup(p, Vec3::Y);
+    println!("shelf against the wall: field {shelf}, brute force {truth}");
+    assert!(
+        truth > 0.2 && (shelf - truth).abs() < 0.05,
+        "{shelf} against {truth}"
+    );
+    let own = lookup(p, Vec3::X);
+    assert!(own < 0.2 * truth, "the wall's own surface reads {own}");
+}
