@@ -4,12 +4,12 @@
 // occluded direction d trilinearly, from grid points outside the object only (their signed
 // distance is positive), so that a point on a thin object never mixes values from its two sides.
 // The object's own surface gets only what lies beyond the near field's reach: the occlusion fades
-// out over the half cell next to it, by the interpolated signed distance, where the receiver
-// faces the way the surface there does (other surfaces touching the object keep all of it), and the near field
+// out over the half cell next to it, by the interpolated signed distance, where the receiver lies
+// along that surface (a surface touching the object across it keeps all of it), and the near field
 // shades that surface within its reach; beyond it, the share the grid points next to the surface
-// baked over their nearest surface point's hemisphere fades in, from the points whose surface
-// faces the way the receiver does (so a thin object's two sides stay apart). a and d become the
-// share of ambient light blocked: 2a (occlusion only, §3.2) or the cone of fraction a around d
+// baked over their nearest surface point's hemisphere fades in, from the points whose surface faces
+// the way the receiver does (so a thin object's two sides stay apart). a and d become the share of
+// ambient light blocked: 2a (occlusion only, §3.2) or the cone of fraction a around d
 // clipped by the receiver's tangent plane (T_clip of §3.3.1, `cap_occlusion`). The field holds
 // them twice, for hits within R and within the near field's reach; under `FarFieldBlend::CountOnce`
 // the near part goes to the red channel where the ND-buffer does not hold its occluders, the
@@ -181,9 +181,7 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     if facing > 0.0 {
         out.own_surface /= facing;
     }
-    // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis, so the
-    // gradient scales by resolution / extent (the grid box's world_from_box holds the extent;
-    // grid_from_world's rows give its inverse).
+    // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis.
     let per_mesh = gradient * field.params.yzw;
     let length2 = dot(per_mesh, per_mesh);
     out.facing = select(1.0, smoothstep(SIDEWAYS, ALONG, abs(dot(per_mesh, n)) * inverseSqrt(length2)), length2 > 1e-20);
