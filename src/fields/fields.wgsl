@@ -96,7 +96,7 @@ struct FieldSample {
     // How far the receiver lies along the object's surface there: 1 where its normal is the
     // surface's (either side, the signed distance's gradient), 0 where it stands across it (a
     // wall standing on a floor).
-    facing: f32,
+    along: f32,
     // The cone's errors on the axis hemispheres +x, +y, +z and −x, −y, −z, within R and within
     // the near field's reach.
     far_positive: vec3<f32>,
@@ -128,7 +128,7 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     out.near_offset = vec3<f32>(0.0);
     out.signed_distance = 0.0;
     out.own_surface = 0.0;
-    out.facing = 0.0;
+    out.along = 0.0;
     out.far_positive = vec3<f32>(0.0);
     out.far_negative = vec3<f32>(0.0);
     out.near_positive = vec3<f32>(0.0);
@@ -184,7 +184,7 @@ fn sample_field(field: FieldInstance, uvw: vec3<f32>, n: vec3<f32>) -> FieldSamp
     // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis.
     let per_mesh = gradient * field.params.yzw;
     let length2 = dot(per_mesh, per_mesh);
-    out.facing = select(1.0, smoothstep(SIDEWAYS, ALONG, abs(dot(per_mesh, n)) * inverseSqrt(length2)), length2 > 1e-20);
+    out.along = select(1.0, smoothstep(SIDEWAYS, ALONG, abs(dot(per_mesh, n)) * inverseSqrt(length2)), length2 > 1e-20);
     return out;
 }
 
@@ -235,7 +235,7 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     // Nothing from the field on the object's own surface, fading in over the half cell next to it.
     // Only the object's own surface fades: another object's surface that touches it (a wall
     // standing on a floor) faces another way and gets the field's full value there.
-    let fade = 1.0 - s.facing * (1.0 - smoothstep(0.0, field.params.x, s.signed_distance));
+    let fade = 1.0 - s.along * (1.0 - smoothstep(0.0, field.params.x, s.signed_distance));
     let all = cone_occlusion(field, s.far.x, s.far.yzw, normal, n_mesh, s.far_positive, s.far_negative) * fade;
     let near = settings.near_field_radius;
     if near <= 0.0 {

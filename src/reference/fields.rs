@@ -29,7 +29,7 @@ pub struct FieldSample {
     /// How far the receiver lies along the object's surface there: 1 where its normal is the
     /// surface's (either side, the signed distance's gradient), 0 where it stands across it (a
     /// wall standing on a floor).
-    pub facing: f32,
+    pub along: f32,
     /// The cone's errors on the axis hemispheres +x, −x, +y, −y, +z, −z within the reach, then
     /// within the near reach ([`AoFieldData::axes`]).
     pub axes: [f32; 12],
@@ -107,7 +107,7 @@ pub fn sample_field(field: &AoFieldData, uvw: Vec3, n: Vec3) -> FieldSample {
     }
     // Per mesh unit: a grid unit spans 2 half_extent / resolution along each axis.
     let normal = (gradient * r / (2.0 * field.half_extent)).normalize_or_zero();
-    out.facing = if normal == Vec3::ZERO {
+    out.along = if normal == Vec3::ZERO {
         1.0
     } else {
         smoothstep_between(SIDEWAYS, ALONG, normal.dot(n).abs())
@@ -147,7 +147,7 @@ pub fn occluder_occlusion(
     let mesh_normal = (world_from_mesh.matrix3.transpose() * n).normalize_or_zero();
     let s = sample_field(field, uvw, mesh_normal);
     // Only the object's own surface fades; another surface touching it keeps the full value.
-    let fade = 1.0 - s.facing * (1.0 - smoothstep(field.own_surface_fade(), s.signed_distance));
+    let fade = 1.0 - s.along * (1.0 - smoothstep(field.own_surface_fade(), s.signed_distance));
     // The axis corrections, weighted by the squared components of the mesh-space normal.
     let correction = |axes: &[f32]| {
         (0..3)
