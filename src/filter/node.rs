@@ -15,16 +15,17 @@ use crate::dispatch::{ComputeStep, record_passes};
 use crate::view::DynamicAoUniform;
 
 /// The pipeline and bind group of a view's last filter pass: `own`, or once our passes write
-/// Bevy's texture and the view has one, the variant that writes visibility there.
+/// Bevy's texture and the view has one, the variant that writes visibility there (`to_visibility`
+/// gives its pipeline for a bind group that is guided or not).
 fn last_pass<'a>(
     cache: &'a PipelineCache,
     own: (CachedComputePipelineId, &'a BindGroup),
-    to_visibility: CachedComputePipelineId,
+    to_visibility: impl Fn(bool) -> CachedComputePipelineId,
     visibility: Option<&'a VisibilityBindGroup>,
     ready: bool,
 ) -> Option<(&'a ComputePipeline, &'a BindGroup)> {
     let (id, bind_group) = match visibility.filter(|_| ready) {
-        Some(visibility) => (to_visibility, &visibility.0),
+        Some(visibility) => (to_visibility(visibility.guided), &visibility.bind_group),
         None => own,
     };
     Some((cache.get_compute_pipeline(id)?, bind_group))
@@ -50,7 +51,7 @@ pub(crate) fn blur_pass(
         last_pass(
             &pipeline_cache,
             (pipelines.one.y, &bind_groups.y),
-            pipelines.to_visibility.y,
+            |_| pipelines.to_visibility.y,
             visibility,
             ready,
         ),
@@ -86,16 +87,24 @@ pub(crate) fn upsample_pass(
     pipeline_cache: Res<PipelineCache>,
     mut ctx: RenderContext,
 ) {
-    let (camera, bind_group, view_offset, settings_index, blur, visibility, ready) =
+    let (camera, upsample, view_offset, settings_index, blur, visibility, ready) =
         view.into_inner();
     // Where the blur runs, its Y pass is the last and the upsampling writes occlusion.
     let visibility = visibility.filter(|_| blur.is_none());
+    let own = match (upsample.guided, &pipelines.one.guided) {
+        (true, Some(guided)) => guided.pipeline,
+        _ => pipelines.one.upsample,
+    };
+    let to_visibility = |guided: bool| match guided {
+        true => pipelines.to_visibility.guided.pipeline,
+        false => pipelines.to_visibility.upsample,
+    };
     let (Some(size), Some((pipeline, bind_group))) = (
         camera.physical_viewport_size,
         last_pass(
             &pipeline_cache,
-            (pipelines.one.upsample, &bind_group.0),
-            pipelines.to_visibility.upsample,
+            (own, &upsample.bind_group),
+            to_visibility,
             visibility,
             ready,
         ),

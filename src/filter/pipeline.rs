@@ -17,6 +17,7 @@ use bevy::shader::{Shader, ShaderDefVal};
 use bevy::utils::default;
 
 use crate::compose::{ParkedSsao, bevy_ssao_format, visibility_texture};
+use crate::temporal::TemporalHistory;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FilterWritesVisibility, OCCLUSION_FORMAT,
     ViewBindings,
@@ -29,6 +30,8 @@ pub(crate) struct FilterPipelines {
     pub y: CachedComputePipelineId,
     pub upsample_layout: BindGroupLayoutDescriptor,
     pub upsample: CachedComputePipelineId,
+    /// The upsampling of an accumulated buffer from its history (one channel only).
+    pub guided: Option<GuidedUpsample>,
 }
 
 impl FilterPipelines {
@@ -38,6 +41,15 @@ impl FilterPipelines {
             .into_iter()
             .all(|id| cache.get_compute_pipeline(id).is_some())
     }
+}
+
+/// The upsampling that reads the temporal pass's history written this frame (`GUIDE_TEXELS` in
+/// `upsample.wgsl`): its texels carry linear depth and normal beside the accumulated occlusion,
+/// so a texel's guide costs one read instead of a depth, a normal and a value read and an
+/// unprojection.
+pub(crate) struct GuidedUpsample {
+    pub layout: BindGroupLayoutDescriptor,
+    pub pipeline: CachedComputePipelineId,
 }
 
 /// Filters for one-channel occlusion (the image-space techniques) and for two-channel far-field
@@ -53,8 +65,9 @@ pub(crate) struct BlurPipelines {
 /// Format of two-channel occlusion buffers.
 pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
 
-/// The bind group layouts of the blur and of the upsampling, writing `format`.
-fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 2] {
+/// The bind group layouts of the blur, of the upsampling and of the guided upsampling, writing
+/// `format`.
+fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 3] {
     let blur = BindGroupLayoutDescriptor::new(
         format!("dynamic_ao_blur{suffix}_layout"),
         &BindGroupLayoutEntries::sequential(
@@ -68,21 +81,33 @@ fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 2
             ),
         ),
     );
-    let upsample = BindGroupLayoutDescriptor::new(
-        format!("dynamic_ao_upsample{suffix}_layout"),
-        &BindGroupLayoutEntries::sequential(
-            ShaderStages::COMPUTE,
-            (
-                uniform_buffer::<ViewUniform>(true),
-                uniform_buffer::<DynamicAoUniform>(true),
-                texture_depth_2d(),
-                texture_2d(TextureSampleType::Float { filterable: false }),
-                texture_2d(TextureSampleType::Float { filterable: false }),
-                texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+    let upsample = |label: String, low: TextureSampleType| {
+        BindGroupLayoutDescriptor::new(
+            label,
+            &BindGroupLayoutEntries::sequential(
+                ShaderStages::COMPUTE,
+                (
+                    uniform_buffer::<ViewUniform>(true),
+                    uniform_buffer::<DynamicAoUniform>(true),
+                    texture_depth_2d(),
+                    texture_2d(TextureSampleType::Float { filterable: false }),
+                    texture_2d(low),
+                    texture_storage_2d(format, StorageTextureAccess::WriteOnly),
+                ),
             ),
+        )
+    };
+    [
+        blur,
+        upsample(
+            format!("dynamic_ao_upsample{suffix}_layout"),
+            TextureSampleType::Float { filterable: false },
         ),
-    );
-    [blur, upsample]
+        upsample(
+            format!("dynamic_ao_upsample_guided{suffix}_layout"),
+            TextureSampleType::Uint,
+        ),
+    ]
 }
 
 /// What a set of filter pipelines writes: its output format, the shader definitions that select
@@ -102,16 +127,42 @@ impl Variant {
         layout: &BindGroupLayoutDescriptor,
         shader: Handle<Shader>,
     ) -> CachedComputePipelineId {
+        self.queue_with(world, entry, layout, shader, None)
+    }
+
+    /// `queue` with one more shader definition, which also names the pipeline.
+    fn queue_with(
+        &self,
+        world: &World,
+        entry: &str,
+        layout: &BindGroupLayoutDescriptor,
+        shader: Handle<Shader>,
+        extra: Option<&'static str>,
+    ) -> CachedComputePipelineId {
+        let mut shader_defs = self.shader_defs.clone();
+        shader_defs.extend(extra.map(ShaderDefVal::from));
+        let extra = extra.map_or(String::new(), |def| format!("_{}", def.to_lowercase()));
         world
             .resource::<PipelineCache>()
             .queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some(format!("dynamic_ao_{entry}{}_pipeline", self.suffix).into()),
+                label: Some(format!("dynamic_ao_{entry}{extra}{}_pipeline", self.suffix).into()),
                 layout: vec![layout.clone()],
                 shader,
-                shader_defs: self.shader_defs.clone(),
+                shader_defs,
                 entry_point: Some(entry.to_string().into()),
                 ..default()
             })
+    }
+
+    /// The guided upsampling of `shader` (`upsample.wgsl`) over `layout`.
+    fn guided(
+        &self,
+        world: &World,
+        layout: BindGroupLayoutDescriptor,
+        shader: Handle<Shader>,
+    ) -> GuidedUpsample {
+        let pipeline = self.queue_with(world, "upsample", &layout, shader, Some("GUIDE_TEXELS"));
+        GuidedUpsample { layout, pipeline }
     }
 }
 
@@ -129,12 +180,14 @@ fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
             suffix: "",
         }
     };
-    let [layout, upsample_layout] = layouts(variant.format, variant.suffix);
+    let [layout, upsample_layout, guided_layout] = layouts(variant.format, variant.suffix);
     let blur = load_embedded_asset!(world, "blur.wgsl");
     let upsample = load_embedded_asset!(world, "upsample.wgsl");
     FilterPipelines {
         x: variant.queue(world, "blur_x", &layout, blur.clone()),
         y: variant.queue(world, "blur_y", &layout, blur),
+        // The voxel term's two channels are upsampled from their own map, never from a history.
+        guided: (!two_channels).then(|| variant.guided(world, guided_layout, upsample.clone())),
         upsample: variant.queue(world, "upsample", &upsample_layout, upsample),
         layout,
         upsample_layout,
@@ -151,6 +204,8 @@ pub(crate) struct VisibilityPipelines {
     pub y: CachedComputePipelineId,
     /// The upsampling, where the blur is off.
     pub upsample: CachedComputePipelineId,
+    /// The guided upsampling, where the blur is off.
+    pub guided: GuidedUpsample,
 }
 
 impl VisibilityPipelines {
@@ -165,11 +220,12 @@ impl VisibilityPipelines {
             shader_defs,
             suffix: "_visibility",
         };
-        let [layout, upsample_layout] = layouts(format, variant.suffix);
+        let [layout, upsample_layout, guided_layout] = layouts(format, variant.suffix);
         let blur = load_embedded_asset!(world, "blur.wgsl");
         let upsample = load_embedded_asset!(world, "upsample.wgsl");
         Self {
             y: variant.queue(world, "blur_y", &layout, blur),
+            guided: variant.guided(world, guided_layout, upsample.clone()),
             upsample: variant.queue(world, "upsample", &upsample_layout, upsample),
             layout,
             upsample_layout,
@@ -194,6 +250,30 @@ pub(crate) struct FilterInputs<'a> {
     pub depth: &'a TextureView,
 }
 
+/// The bind group of an upsampling pass over `layout`: `low` (half size) into `full`.
+fn upsample_bind_group(
+    device: &RenderDevice,
+    pipeline_cache: &PipelineCache,
+    layout: &BindGroupLayoutDescriptor,
+    label: &'static str,
+    inputs: &FilterInputs,
+    normal: &TextureView,
+    [low, full]: [&TextureView; 2],
+) -> BindGroup {
+    device.create_bind_group(
+        label,
+        &pipeline_cache.get_bind_group_layout(layout),
+        &BindGroupEntries::sequential((
+            inputs.view.clone(),
+            inputs.settings.clone(),
+            inputs.depth,
+            normal,
+            low,
+            full,
+        )),
+    )
+}
+
 impl FilterPipelines {
     /// The bind group of an upsampling pass: `low` (half size) into `full`.
     pub fn upsample_bind_group(
@@ -203,19 +283,17 @@ impl FilterPipelines {
         label: &'static str,
         inputs: &FilterInputs,
         normal: &TextureView,
-        [low, full]: [&TextureView; 2],
+        textures: [&TextureView; 2],
     ) -> BindGroup {
-        device.create_bind_group(
+        let layout = &self.upsample_layout;
+        upsample_bind_group(
+            device,
+            pipeline_cache,
+            layout,
             label,
-            &pipeline_cache.get_bind_group_layout(&self.upsample_layout),
-            &BindGroupEntries::sequential((
-                inputs.view.clone(),
-                inputs.settings.clone(),
-                inputs.depth,
-                normal,
-                low,
-                full,
-            )),
+            inputs,
+            normal,
+            textures,
         )
     }
 
@@ -258,13 +336,21 @@ pub(crate) struct BlurBindGroups {
 
 /// Half-size occlusion → full-size occlusion.
 #[derive(Component)]
-pub(crate) struct UpsampleBindGroup(pub BindGroup);
+pub(crate) struct UpsampleBindGroup {
+    pub bind_group: BindGroup,
+    /// For the guided upsampling, reading the temporal pass's history ([`GuidedUpsample`]).
+    pub guided: bool,
+}
 
 /// The bind group of the last filter pass where it writes visibility
 /// ([`FilterWritesVisibility`]): the blur's Y pass (scratch → visibility), or the upsampling
 /// (half-size occlusion → visibility) where the blur is off.
 #[derive(Component)]
-pub(crate) struct VisibilityBindGroup(pub BindGroup);
+pub(crate) struct VisibilityBindGroup {
+    pub bind_group: BindGroup,
+    /// For the guided upsampling ([`GuidedUpsample`]).
+    pub guided: bool,
+}
 
 pub(crate) fn prepare_blur_bind_groups(
     mut commands: Commands,
@@ -279,12 +365,14 @@ pub(crate) fn prepare_blur_bind_groups(
         &DynamicAoView,
         Option<&ScreenSpaceAmbientOcclusionResources>,
         Option<&ParkedSsao>,
+        Option<&TemporalHistory>,
     )>,
 ) {
     let Some((view_binding, settings_binding)) = bindings.get() else {
         return;
     };
-    for (entity, textures, prepass, view, resources, parked) in &views {
+    let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
+    for (entity, textures, prepass, view, resources, parked, history) in &views {
         let Some(depth) = prepass.depth() else {
             commands.entity(entity).remove::<(
                 UpsampleBindGroup,
@@ -301,31 +389,56 @@ pub(crate) fn prepare_blur_bind_groups(
         };
         let occlusion = &textures.full_occlusion.default_view;
         let half_normal = prepass.normal().filter(|_| view.half_resolution);
-        match half_normal {
-            Some(normal) => {
-                commands.entity(entity).insert(UpsampleBindGroup(
-                    pipelines.one.upsample_bind_group(
-                        &render_device,
-                        &pipeline_cache,
-                        "dynamic_ao_upsample_bind_group",
-                        &inputs,
-                        normal,
-                        [&textures.near_occlusion.default_view, occlusion],
-                    ),
-                ));
+        // The history the temporal pass writes this frame, where it runs (it runs wherever the
+        // technique writes a raw buffer for it).
+        let guide = history
+            .filter(|_| view.temporal && textures.raw_occlusion.is_some())
+            .map(TemporalHistory::written);
+        // The bind group of an upsampling from `low` (half size) into `output` over `layout`, or,
+        // where there is a guide and `guided` has compiled, of the guided one; and which it is.
+        let upsample = |layout, guided: Option<&GuidedUpsample>, low, output, label| {
+            let guided = guided.filter(|g| ready(g.pipeline)).zip(guide);
+            let (layout, low) = guided.map_or((layout, low), |(g, history)| (&g.layout, history));
+            let bind_group = half_normal.map(|normal| {
+                let textures = [low, output];
+                upsample_bind_group(
+                    &render_device,
+                    &pipeline_cache,
+                    layout,
+                    label,
+                    &inputs,
+                    normal,
+                    textures,
+                )
+            });
+            bind_group.map(|bind_group| (bind_group, guided.is_some()))
+        };
+        let low = &textures.near_occlusion.default_view;
+        let one = &pipelines.one;
+        let label = "dynamic_ao_upsample_bind_group";
+        match upsample(
+            &one.upsample_layout,
+            one.guided.as_ref(),
+            low,
+            occlusion,
+            label,
+        ) {
+            Some((bind_group, guided)) => {
+                commands
+                    .entity(entity)
+                    .insert(UpsampleBindGroup { bind_group, guided });
             }
             None => {
                 commands.entity(entity).remove::<UpsampleBindGroup>();
             }
         }
         let to_visibility = &pipelines.to_visibility;
-        let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
         let visibility = visibility_texture(resources, parked)
             .filter(|_| view.filter_is_last())
             .map(|texture| &texture.default_view);
         let last = match (visibility, view.blur_radius, half_normal) {
-            (Some(visibility), 1.., _) if ready(to_visibility.y) => {
-                Some(render_device.create_bind_group(
+            (Some(visibility), 1.., _) if ready(to_visibility.y) => Some(VisibilityBindGroup {
+                bind_group: render_device.create_bind_group(
                     "dynamic_ao_blur_y_visibility_bind_group",
                     &pipeline_cache.get_bind_group_layout(&to_visibility.layout),
                     &BindGroupEntries::sequential((
@@ -335,29 +448,24 @@ pub(crate) fn prepare_blur_bind_groups(
                         &textures.blur_scratch.default_view,
                         visibility,
                     )),
-                ))
-            }
-            (Some(visibility), 0, Some(normal)) if ready(to_visibility.upsample) => {
-                Some(render_device.create_bind_group(
-                    "dynamic_ao_upsample_visibility_bind_group",
-                    &pipeline_cache.get_bind_group_layout(&to_visibility.upsample_layout),
-                    &BindGroupEntries::sequential((
-                        inputs.view.clone(),
-                        inputs.settings.clone(),
-                        inputs.depth,
-                        normal,
-                        &textures.near_occlusion.default_view,
-                        visibility,
-                    )),
-                ))
-            }
+                ),
+                guided: false,
+            }),
+            (Some(visibility), 0, Some(_)) if ready(to_visibility.upsample) => upsample(
+                &to_visibility.upsample_layout,
+                Some(&to_visibility.guided),
+                low,
+                visibility,
+                "dynamic_ao_upsample_visibility_bind_group",
+            )
+            .map(|(bind_group, guided)| VisibilityBindGroup { bind_group, guided }),
             _ => None,
         };
         match last {
             Some(bind_group) => {
                 commands
                     .entity(entity)
-                    .insert((VisibilityBindGroup(bind_group), FilterWritesVisibility));
+                    .insert((bind_group, FilterWritesVisibility));
             }
             None => {
                 commands

@@ -8,10 +8,13 @@
 // of one texel, whose brackets lie within the 3 × 3 texels around it: each texel's depth,
 // normal, position and value are read once for the four (9 texels instead of 16), and the
 // quad's first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
-// as compose would have (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
+// as compose would have (`DynamicAoView::filter_is_last`). With GUIDE_TEXELS it reads the temporal
+// pass's history of this frame, whose texels carry their linear depth and normal beside the
+// occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
+// 8-bit). `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position}
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth}
 #import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
 #import bevy_dynamic_ao::math::wendland
 #import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
@@ -20,7 +23,13 @@
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
+#ifdef GUIDE_TEXELS
+// Per texel: occlusion, linear depth and frames (f32 bits), normal (4 × 8-bit snorm);
+// `temporal.wgsl` writes it.
+@group(0) @binding(4) var low: texture_2d<u32>;
+#else
 @group(0) @binding(4) var low: texture_2d<f32>;
+#endif
 #ifdef VISIBILITY_R16FLOAT
 @group(0) @binding(5) var output: texture_storage_2d<r16float, write>;
 #else ifdef VISIBILITY
@@ -43,6 +52,7 @@ fn store(x: vec2<i32>, value: vec2<f32>) {
 #endif
 }
 
+#ifndef GUIDE_TEXELS
 // The channels a texel of `low` carries.
 fn low_value(l: vec2<i32>) -> vec2<f32> {
 #ifdef TWO_CHANNELS
@@ -51,6 +61,7 @@ fn low_value(l: vec2<i32>) -> vec2<f32> {
     return vec2<f32>(textureLoad(low, l, 0).r, 0.0);
 #endif
 }
+#endif
 
 // One texel of `low`: where it was computed, and its channels.
 struct Texel {
@@ -59,9 +70,32 @@ struct Texel {
 }
 
 fn texel(l: vec2<i32>, low_dims: vec2<i32>) -> Texel {
+#ifdef GUIDE_TEXELS
+    let h = textureLoad(low, clamp(l, vec2<i32>(0), low_dims - 1), 0);
+    let z = bitcast<f32>(h.y);
+    let y = l * 2;
+    let dims = vec2<f32>(textureDimensions(depth_texture));
+    let on_surface = all(l >= vec2<i32>(0)) && all(l < low_dims) && z > 0.0;
+    let p = position_at_linear_depth(view, (vec2<f32>(y) + 0.5) / dims, z);
+    let g = Guide(y, p, unpack4x8snorm(h.w).xyz, on_surface);
+    // A texel off the buffer has no weight; its value is never read.
+    return Texel(g, vec2<f32>(bitcast<f32>(h.x), 0.0));
+#else
     let g = texel_guide(view, depth_texture, normal_texture, l, low_dims);
     // A texel off the buffer has no weight; its value is never read.
     return Texel(g, low_value(clamp(l, vec2<i32>(0), low_dims - 1)));
+#endif
+}
+
+// The position of pixel `x` at reverse-Z `depth` in the space the texels' guides are in: view
+// space where they come from linear depths, world space where from the ND-buffer (distances are
+// the same in both).
+fn pixel_position(x: vec2<i32>, dims: vec2<i32>, depth: f32) -> vec3<f32> {
+#ifdef GUIDE_TEXELS
+    return position_in_view(view, (vec2<f32>(x) + 0.5) / vec2<f32>(dims), depth);
+#else
+    return world_position(view, x, vec2<f32>(dims), depth);
+#endif
 }
 
 // The weight of texel `t` for pixel `x` (world position `p`, unit normal `n`, nearest texel's
@@ -81,7 +115,7 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel
         store(x, vec2<f32>(0.0));
         return;
     }
-    let p = world_position(view, x, vec2<f32>(dims), depth);
+    let p = pixel_position(x, dims, depth);
     let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
     blend_at(x, p, n, a, b, c, d);
 }

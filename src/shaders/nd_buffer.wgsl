@@ -30,6 +30,22 @@ fn position_in_view(view: View, uv: vec2<f32>, depth: f32) -> vec3<f32> {
     return p.xyz / p.w;
 }
 
+// View-space position at viewport coordinates `uv` (0..1, y down) and linear depth `z` (metres in
+// front of the camera): `position_in_view` for a depth already made linear, read off the
+// projection instead of inverting it (Bevy's projections have no skew: x and y each depend on one
+// view-space coordinate and on depth).
+fn position_at_linear_depth(view: View, uv: vec2<f32>, z: f32) -> vec3<f32> {
+    let p = view.clip_from_view;
+    let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    // View space looks down −z; clip w is −z for a perspective projection and 1 for an
+    // orthographic one.
+    let view_z = -z;
+    let w = p[2][3] * view_z + p[3][3];
+    let x = (ndc.x * w - p[2][0] * view_z - p[3][0]) / p[0][0];
+    let y = (ndc.y * w - p[2][1] * view_z - p[3][1]) / p[1][1];
+    return vec3<f32>(x, y, view_z);
+}
+
 // Distance in front of the camera along its view axis of the point at viewport coordinates `uv`
 // and reverse-Z depth `depth`, metres.
 fn linear_depth(view: View, uv: vec2<f32>, depth: f32) -> f32 {

@@ -28,7 +28,8 @@
 //!
 //! The history lives in two textures per view (read one, write the other, swapped every frame),
 //! kept across frames on the render-world view and made again only when the view's size changes.
-//! The blur that follows runs at half its radius.
+//! The upsampling reads the history written this frame, whose texels carry the depth and normal
+//! it needs ([`crate::filter`]). The blur that follows runs at half its radius.
 //!
 //! The voxel term ([`crate::voxels`]) accumulates the same way, in a history of its own: its rays
 //! turn every frame by the same sequence, and the pass (`PAIR` in `temporal.wgsl`) runs on its

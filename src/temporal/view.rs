@@ -66,6 +66,13 @@ impl TemporalHistory {
         (&self.textures[self.read].1, &self.textures[1 - self.read].1)
     }
 
+    /// The history this frame writes: once the temporal pass has run, each texel holds the
+    /// accumulated occlusion, its linear depth and frame count (f32 bits) and its normal
+    /// (4 × 8-bit snorm), read as a `texture_2d<u32>`.
+    pub fn written(&self) -> &TextureView {
+        self.views().1
+    }
+
     /// Moves `history` on by a frame: swaps its textures and writes its uniform, dropping what it
     /// holds when the settings changed, a reset was asked for or motion vectors are missing.
     /// Returns a new history (which holds nothing yet) where there was none or its size differs.
