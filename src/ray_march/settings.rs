@@ -7,7 +7,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// marched in `steps` equal steps over the radius R ([`DynamicAo::radius`](crate::DynamicAo::radius)). A step is blocked
 /// where it lies behind the front layer and in front of the back-face layer (or, where no back
 /// face was drawn, less than R behind the front layer). Under temporal accumulation the rays'
-/// rotation, elevations and step offsets move every frame, so the default 2 rays of 8 steps
+/// rotation, elevations and step offsets move every frame, so the default 2 rays of 6 steps
 /// per frame add up to many more; without it, give it [`RayMarchParams::REFERENCE`] or more.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
@@ -17,7 +17,7 @@ pub struct RayMarchParams {
     /// Elevations per azimuth, stratified for a cosine-weighted hemisphere. Valid: 1..=64.
     /// Default: 1.
     pub elevations: u32,
-    /// Samples per ray. Valid: 1..=64. Default: 8.
+    /// Samples per ray. Valid: 1..=64. Default: 6.
     pub steps: u32,
 }
 
@@ -26,7 +26,7 @@ impl Default for RayMarchParams {
         Self {
             directions: 2,
             elevations: 1,
-            steps: 8,
+            steps: 6,
         }
     }
 }

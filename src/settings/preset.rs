@@ -15,7 +15,7 @@ use super::{
 /// |---|---|---|---|---|---|---|
 /// | `Low` | horizon | 8 | 4 × 4, low | 1 × 1 × 4 | yes | no |
 /// | `Medium` | ray march | 16 | 8 × 8, low | 1 × 1 × 8 | yes | yes |
-/// | `High` (the default) | ray march | 32 | 8 × 8, normal | 2 × 1 × 8 | yes | yes |
+/// | `High` (the default) | ray march | 32 | 8 × 8, normal | 2 × 1 × 6 | yes | yes |
 /// | `Ultra` | ray march | 64 | 8 × 8, high | 2 × 2 × 8 | yes | yes |
 ///
 /// The ray march counts what ground truth counts (cosine-weighted rays that hit within R), so
@@ -29,7 +29,7 @@ pub enum AoPreset {
     Low,
     /// Ray march, 1 ray of 8 steps per frame at half resolution, accumulated.
     Medium,
-    /// Ray march, 2 × 1 rays of 8 steps per frame at half resolution, accumulated (the
+    /// Ray march, 2 × 1 rays of 6 steps per frame at half resolution, accumulated (the
     /// [`DynamicAo`] default).
     #[default]
     High,
@@ -100,7 +100,7 @@ impl AoPreset {
         let (directions, elevations, steps) = match self {
             AoPreset::Low => (1, 1, 4),
             AoPreset::Medium => (1, 1, 8),
-            AoPreset::High => (2, 1, 8),
+            AoPreset::High => (2, 1, 6),
             AoPreset::Ultra => (2, 2, 8),
         };
         RayMarchParams {

@@ -99,7 +99,7 @@ fn steps_limit_the_default_on_fine_detail() {
         steps[1] < 0.92 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
         "more steps per ray should bring the ray march closer to the truth: {steps:?}"
     );
-    // Measured: 2 × 16 steps 0.053 against the default's 0.058.
+    // Measured: 2 × 16 steps 0.053 against the default's 2 × 6 steps 0.063.
     assert!(
         errors[3] < 0.95 * errors[0],
         "16 steps per ray should lower the default's error: {:.4} against {:.4}",

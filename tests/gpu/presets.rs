@@ -102,11 +102,11 @@ fn presets_converge_and_the_default_beats_bevy_ssao() {
             "{name}: preset {preset:?} converged RMSE {error} not below Bevy's High {bevy}"
         );
         if preset == AoPreset::default() {
-            // Measured: 0.07–0.21 × Bevy's RMSE; high-frequency error 0.006–0.011 against
+            // Measured: 0.08–0.23 × Bevy's RMSE; high-frequency error 0.006–0.011 against
             // Bevy's 0.012–0.023.
             assert!(
-                error <= 0.23 * bevy,
-                "{name}: the default's RMSE {error:.4} is over 0.23 × Bevy's {bevy:.4}"
+                error <= 0.25 * bevy,
+                "{name}: the default's RMSE {error:.4} is over 0.25 × Bevy's {bevy:.4}"
             );
             assert!(
                 hf <= bevy_hf,
@@ -160,10 +160,10 @@ fn the_default_keeps_detail_on_third_party_models() {
             scene.name,
             error / bevy
         );
-        // Measured: 0.11–0.36 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
+        // Measured: 0.12–0.39 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
         // 0.032–0.044.
         assert!(
-            error <= 0.40 * bevy,
+            error <= 0.42 * bevy,
             "{}: RMSE {error:.4} against Bevy's {bevy:.4}",
             scene.name
         );
