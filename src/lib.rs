@@ -170,6 +170,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/nd_buffer.wgsl");
         load_shader_library!(app, "shaders/sampling.wgsl");
         load_shader_library!(app, "shaders/math.wgsl");
+        load_shader_library!(app, "shaders/history.wgsl");
         load_shader_library!(app, "shaders/uniform.wgsl");
         load_shader_library!(app, "shaders/image_space_bindings.wgsl");
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");

@@ -40,7 +40,7 @@ use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 use crate::view::{DynamicAoView, PendingPasses};
 
-pub(crate) use pipeline::{BlurBindGroups, BlurPipelines, FilterInputs, OCCLUSION_PAIR_FORMAT};
+pub(crate) use pipeline::{BlurBindGroups, BlurPipelines, FilterInputs};
 
 /// Registers the blur pipelines and passes.
 pub struct FilterPlugin;

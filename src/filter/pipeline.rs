@@ -20,7 +20,7 @@ use crate::compose::{ParkedSsao, bevy_ssao_format, visibility_texture};
 use crate::temporal::TemporalHistory;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FilterWritesVisibility, OCCLUSION_FORMAT,
-    ViewBindings,
+    OCCLUSION_PAIR_FORMAT, ViewBindings,
 };
 
 /// The blur and upsampling pipelines for one kind of occlusion buffer.
@@ -61,9 +61,6 @@ pub(crate) struct BlurPipelines {
     pub two: FilterPipelines,
     pub to_visibility: VisibilityPipelines,
 }
-
-/// Format of two-channel occlusion buffers.
-pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
 
 /// The bind group layouts of the blur, of the upsampling and of the guided upsampling, writing
 /// `format`.

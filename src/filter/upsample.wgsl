@@ -18,14 +18,14 @@
 #import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
 #import bevy_dynamic_ao::math::wendland
 #import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
+#import bevy_dynamic_ao::history::unpack_history
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth_texture: texture_depth_2d;
 @group(0) @binding(3) var normal_texture: texture_2d<f32>;
 #ifdef GUIDE_TEXELS
-// Per texel: occlusion, linear depth and frames (f32 bits), normal (4 × 8-bit snorm);
-// `temporal.wgsl` writes it.
+// `HistoryTexel`s of one channel, which `temporal.wgsl` writes.
 @group(0) @binding(4) var low: texture_2d<u32>;
 #else
 @group(0) @binding(4) var low: texture_2d<f32>;
@@ -71,15 +71,14 @@ struct Texel {
 
 fn texel(l: vec2<i32>, low_dims: vec2<i32>) -> Texel {
 #ifdef GUIDE_TEXELS
-    let h = textureLoad(low, clamp(l, vec2<i32>(0), low_dims - 1), 0);
-    let z = bitcast<f32>(h.y);
+    let h = unpack_history(textureLoad(low, clamp(l, vec2<i32>(0), low_dims - 1), 0));
     let y = l * 2;
     let dims = vec2<f32>(textureDimensions(depth_texture));
-    let on_surface = all(l >= vec2<i32>(0)) && all(l < low_dims) && z > 0.0;
-    let p = position_at_linear_depth(view, (vec2<f32>(y) + 0.5) / dims, z);
-    let g = Guide(y, p, unpack4x8snorm(h.w).xyz, on_surface);
+    let on_surface = all(l >= vec2<i32>(0)) && all(l < low_dims) && h.depth > 0.0;
+    let p = position_at_linear_depth(view, (vec2<f32>(y) + 0.5) / dims, h.depth);
+    let g = Guide(y, p, h.normal, on_surface);
     // A texel off the buffer has no weight; its value is never read.
-    return Texel(g, vec2<f32>(bitcast<f32>(h.x), 0.0));
+    return Texel(g, vec2<f32>(bitcast<f32>(h.value), 0.0));
 #else
     let g = texel_guide(view, depth_texture, normal_texture, l, low_dims);
     // A texel off the buffer has no weight; its value is never read.

@@ -14,9 +14,8 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::view::{TemporalHistory, TemporalUniform};
-use crate::filter::OCCLUSION_PAIR_FORMAT;
 use crate::nd_buffer::{FrontLayer, FrontLayerViews};
-use crate::view::{DynamicAoTextures, OCCLUSION_FORMAT};
+use crate::view::{DynamicAoTextures, OCCLUSION_FORMAT, OCCLUSION_PAIR_FORMAT};
 
 /// One accumulation pipeline and its layout.
 pub(crate) struct TemporalVariant {

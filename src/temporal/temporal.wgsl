@@ -7,6 +7,7 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
+#import bevy_dynamic_ao::history::{HistoryTexel, pack_history, unpack_history}
 
 struct TemporalUniform {
     // 1: every history is dropped this frame.
@@ -25,8 +26,7 @@ struct TemporalUniform {
 @group(0) @binding(4) var front_normal: texture_2d<f32>;
 // Bevy's motion vectors: this frame's UV minus last frame's.
 @group(0) @binding(5) var motion_vectors: texture_2d<f32>;
-// Per texel: occlusion (f32 bits, or both channels as 2 × 16-bit unorm with `PAIR`), linear
-// depth and frames (f32 bits) and the normal (4 × 8-bit snorm).
+// `HistoryTexel`s (occlusion as f32 bits, or both channels as 2 × 16-bit unorm with `PAIR`).
 @group(0) @binding(6) var history_in: texture_2d<u32>;
 @group(0) @binding(7) var history_out: texture_storage_2d<rgba32uint, write>;
 // The accumulated occlusion the filter and compose read.
@@ -126,13 +126,8 @@ fn unpack_value(packed: u32) -> vec2<f32> {
 }
 
 fn store(texel: vec2<i32>, value: vec2<f32>, depth: f32, frames: f32, normal: vec3<f32>) {
-    let packed = vec4<u32>(
-        pack_value(value),
-        bitcast<u32>(depth),
-        bitcast<u32>(frames),
-        pack4x8snorm(vec4<f32>(normal, 0.0)),
-    );
-    textureStore(history_out, texel, packed);
+    let history = HistoryTexel(pack_value(value), depth, frames, normal);
+    textureStore(history_out, texel, pack_history(history));
     textureStore(occlusion, texel, vec4<f32>(value, 0.0, 0.0));
 }
 
@@ -256,16 +251,13 @@ fn accumulate(
             if any(q < vec2<i32>(0)) || any(q >= dims) {
                 continue;
             }
-            let h = textureLoad(history_in, q, 0);
-            let h_frames = bitcast<f32>(h.z);
-            let h_depth = bitcast<f32>(h.y);
-            let h_normal = unpack4x8snorm(h.w).xyz;
-            if h_frames <= 0.0 || !same_surface(h_depth, h_normal, z, n) {
+            let h = unpack_history(textureLoad(history_in, q, 0));
+            if h.frames <= 0.0 || !same_surface(h.depth, h.normal, z, n) {
                 continue;
             }
             let w = mix(1.0 - f.x, f.x, f32(corner.x)) * mix(1.0 - f.y, f.y, f32(corner.y));
-            history += w * unpack_value(h.x);
-            frames += w * h_frames;
+            history += w * unpack_value(h.value);
+            frames += w * h.frames;
             weight += w;
         }
     }

@@ -41,6 +41,9 @@ pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
 pub(crate) const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
 /// Format of the intermediate occlusion buffers (always usable as a storage texture).
 pub(crate) const OCCLUSION_FORMAT: TextureFormat = TextureFormat::R32Float;
+/// Format of two-channel occlusion buffers (the voxel term's: the near field's share and the
+/// rest, see `FarFieldBlend`).
+pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
 /// Format of the far-field visibility buffers: blendable on every adapter (32-bit float blending
 /// is optional). Red: visibility left by the occluders the near field would count but cannot
 /// see; green: by the rest (see `FarFieldBlend::CountOnce`); alpha (sphere occluders): the

@@ -18,8 +18,9 @@ use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
 use super::view::{VoxelHistory, VoxelTextures};
-use crate::filter::{BlurBindGroups, BlurPipelines, FilterInputs, OCCLUSION_PAIR_FORMAT};
+use crate::filter::{BlurBindGroups, BlurPipelines, FilterInputs};
 use crate::temporal::{AccumulationTextures, Channels, TemporalPipeline};
+use crate::view::OCCLUSION_PAIR_FORMAT;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm, ViewBindings,
 };

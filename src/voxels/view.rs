@@ -12,9 +12,9 @@ use bevy::render::{
 };
 
 use super::component::VoxelGridInfo;
-use crate::filter::OCCLUSION_PAIR_FORMAT;
 use crate::memory::DynamicAoGpuMemory;
 use crate::temporal::{HistoryFrame, TemporalHistory};
+use crate::view::OCCLUSION_PAIR_FORMAT;
 use crate::view::{
     DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, half_size, view_size, view_texture,
 };
