@@ -46,34 +46,35 @@ fn blocked(
     if clip.w <= 0.0 {
         return -1;
     }
-    let ndc = clip.xy / clip.w;
+    let ndc = clip.xyz / clip.w;
     let q = vec2<i32>(floor(vec2<f32>((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * size));
     if any(q < vec2<i32>(0)) || any(q >= dims) {
         // The ray left the screen: nothing more is known along it.
         return -1;
     }
     let front = textureLoad(front_depth, q, 0);
-    if front <= 0.0 {
-        return 0;
-    }
-    let front_z = view_z(rows, q, size, front);
-    // No tolerance in depth: the rays' start height already keeps the receiver's own surface from
-    // blocking them, and a tolerance (it was a hundredth of R) hid grooves shallower than it, many
-    // pixels wide at high resolutions.
-    if z >= front_z {
+    // Depths are compared as stored (reverse-Z: a larger depth is nearer), not as view-space z:
+    // Bevy's projections map depth to view-space z alone, whatever the pixel, so the tests agree,
+    // and most steps end at the first one without unprojecting anything. No tolerance in depth:
+    // the rays' start height already keeps the receiver's own surface from blocking them, and a
+    // tolerance (it was a hundredth of R) hid grooves shallower than it, many pixels wide at high
+    // resolutions.
+    if front <= 0.0 || ndc.z >= front {
         return 0;
     }
     let back = textureLoad(back_depth, q, 0);
     if back > 0.0 {
-        let back_z = view_z(rows, q, size, back);
-        if z > back_z {
+        if ndc.z > back {
             return 1;
         }
         // A wall of one polygon has its back face where its front is: no step lands between
         // them, so a ray through it shows only as a step in front and the next one behind.
+        let front_z = view_z(rows, q, size, front);
+        let back_z = view_z(rows, q, size, back);
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }
+    let front_z = view_z(rows, q, size, front);
     return select(0, 1, front_z - z < radius);
 }
 
