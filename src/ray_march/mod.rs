@@ -17,7 +17,7 @@
 //! more give in one frame (see [`AoPreset`](crate::AoPreset)). `reference::ray_march` is the CPU
 //! twin (of a single frame).
 //!
-//! This folder holds the technique's settings (`settings.rs`) and shader (`ray_march.wgsl`). Its pass
+//! This folder holds the technique's settings (`settings.rs`) and shader (`march.wgsl`). Its pass
 //! is shared with the other image-space techniques and lives in `src/image_space/`:
 //! `image_space/pipeline.rs` compiles this shader over the common layout,
 //! `image_space/node.rs` dispatches it; the common bindings are `shaders/image_space_bindings.wgsl`.
@@ -33,10 +33,10 @@ pub struct RayMarchPlugin;
 
 impl Plugin for RayMarchPlugin {
     fn build(&self, app: &mut App) {
-        embedded_asset!(app, "ray_march.wgsl");
+        embedded_asset!(app, "march.wgsl");
     }
 }
 
 pub(crate) fn shader(world: &World) -> Handle<Shader> {
-    load_embedded_asset!(world, "ray_march.wgsl")
+    load_embedded_asset!(world, "march.wgsl")
 }

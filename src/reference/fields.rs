@@ -200,25 +200,14 @@ pub fn field_occlusion(
     use_back: bool,
 ) -> Vec<f32> {
     let held = |x: Vec3, tolerance: f32| nd.holds(view, use_back, x, tolerance);
-    let mut out = vec![0.0; (nd.width * nd.height) as usize];
-    for y in 0..nd.height as i32 {
-        for x in 0..nd.width as i32 {
-            let Some(texel) = nd.texel(false, x, y) else {
-                continue;
-            };
-            if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
-                continue;
-            }
-            let p = view.world_position(x, y, nd.width, nd.height, texel.depth);
-            let mut open = [1.0f32; 2];
-            for (field, transform) in occluders {
-                let parts =
-                    occluder_occlusion(field, *transform, p, texel.normal, shading, near, &held);
-                open[0] *= 1.0 - parts[0];
-                open[1] *= 1.0 - parts[1];
-            }
-            out[(y as u32 * nd.width + x as u32) as usize] = 1.0 - open[0] * open[1];
+    nd.per_receiver(view, |receiver| {
+        let (p, n) = (receiver.world_position, receiver.texel.normal);
+        let mut open = [1.0f32; 2];
+        for (field, transform) in occluders {
+            let parts = occluder_occlusion(field, *transform, p, n, shading, near, &held);
+            open[0] *= 1.0 - parts[0];
+            open[1] *= 1.0 - parts[1];
         }
-    }
-    out
+        1.0 - open[0] * open[1]
+    })
 }

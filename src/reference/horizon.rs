@@ -1,7 +1,7 @@
 //! Horizon-based occlusion (Bavoil & Sainz 2008, all three modes) on the CPU, step for
 //! step as `horizon/horizon.wgsl` computes it.
 
-use bevy::math::{IVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
+use bevy::math::{IVec2, Vec2, Vec3};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::{HASH_TO_UNIT, pcg_hash};
@@ -27,17 +27,6 @@ pub struct HorizonInputs {
     pub mode: u32,
 }
 
-fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
-    let uv = (pixel.as_vec2() + 0.5) / Vec2::new(width as f32, height as f32);
-    view_position_at(view, uv, depth)
-}
-
-fn view_position_at(view: &ViewMatrices, uv: Vec2, depth: f32) -> Vec3 {
-    let p =
-        view.clip_from_view.inverse() * Vec4::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    p.xyz() / p.w
-}
-
 /// The tangent-plane vector one pixel along image direction `dir` covers (see the shader).
 fn tangent_along(
     view: &ViewMatrices,
@@ -48,8 +37,8 @@ fn tangent_along(
     n: Vec3,
 ) -> Vec3 {
     let uv = (pixel.as_vec2() + 0.5 + dir) / size;
-    let a = view_position_at(view, uv, 1.0);
-    let b = view_position_at(view, uv, 0.5);
+    let a = view.view_position_at(uv.x, uv.y, 1.0);
+    let b = view.view_position_at(uv.x, uv.y, 0.5);
     let denominator = n.dot(b - a);
     if denominator.abs() < 1e-12 {
         let along = Vec3::new(dir.x, -dir.y, 0.0);
@@ -60,17 +49,7 @@ fn tangent_along(
 
 /// Occlusion (0 = open) of every pixel of the front layer of `nd`, row-major.
 pub fn horizon_occlusion(nd: &NdBuffer, view: &ViewMatrices, inputs: &HorizonInputs) -> Vec<f32> {
-    (0..nd.width * nd.height)
-        .map(|i| {
-            pixel_occlusion(
-                nd,
-                view,
-                inputs,
-                (i % nd.width) as i32,
-                (i / nd.width) as i32,
-            )
-        })
-        .collect()
+    nd.per_pixel(|x, y| pixel_occlusion(nd, view, inputs, x, y))
 }
 
 /// Occlusion of one pixel.
@@ -82,17 +61,10 @@ pub fn pixel_occlusion(
     y: i32,
 ) -> f32 {
     let (w, h) = (nd.width, nd.height);
-    let Some(texel) = nd.texel(false, x, y) else {
+    let Some(receiver) = nd.receiver(view, x, y) else {
         return 0.0;
     };
-    if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
-        return 0.0;
-    }
-    let pixel = IVec2::new(x, y);
-    let p = view_position(view, pixel, w, h, texel.depth);
-    let n = (view.view_from_world * texel.normal.extend(0.0))
-        .xyz()
-        .normalize();
+    let (pixel, p, n) = (receiver.pixel, receiver.view_position, receiver.view_normal);
     let radius_px = inputs.radius / view.pixel_world_size(-p.z, h);
     let steps = (radius_px as u32).clamp(1, inputs.steps);
     let step_px = radius_px / steps as f32;
@@ -120,7 +92,7 @@ pub fn pixel_occlusion(
                 && let Some(t) = nd.texel(false, q.x, q.y)
                 && t.depth > 0.0
             {
-                let v = view_position(view, q, w, h, t.depth) - p;
+                let v = view.view_position(q.x, q.y, w, h, t.depth) - p;
                 let r = v.length();
                 if r > 0.0 && r < inputs.radius {
                     sin_horizon = sin_horizon.max(v.z / r);
@@ -140,7 +112,7 @@ pub fn pixel_occlusion(
             if t.depth <= 0.0 {
                 continue;
             }
-            let v = view_position(view, q, w, h, t.depth) - p;
+            let v = view.view_position(q.x, q.y, w, h, t.depth) - p;
             let r = v.length();
             if r >= inputs.radius || r <= 0.0 {
                 continue;

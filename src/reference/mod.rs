@@ -4,7 +4,7 @@
 //! - [`nd_buffer`]: an ND-buffer read back from the GPU and the camera that made it.
 //! - [`near_field`]: Shanmugam & Arikan eq. 2–4 exactly as `near_field.wgsl` evaluates them.
 //! - [`horizon`]: horizon-based AO (Bavoil & Sainz 2008) exactly as `horizon.wgsl` runs it.
-//! - [`ray_march`]: the ray-marched reference exactly as `ray_march.wgsl` runs it.
+//! - [`ray_march`]: the ray-marched reference exactly as `march.wgsl` runs it.
 //! - [`fields`]: AO field occlusion exactly as `fields/fields.wgsl` evaluates it.
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.

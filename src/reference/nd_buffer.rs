@@ -1,7 +1,7 @@
 //! An ND-buffer on the CPU, and the camera that rendered it: the CPU twin of
 //! `shaders/nd_buffer.wgsl`.
 
-use bevy::math::{Mat4, Vec3, Vec4, Vec4Swizzles};
+use bevy::math::{IVec2, Mat4, Vec3, Vec4, Vec4Swizzles};
 
 /// One ND-buffer texel: world-space unit normal (zero where nothing was drawn) and reverse-Z
 /// depth (0 where nothing was drawn).
@@ -95,6 +95,22 @@ impl ViewMatrices {
     }
 }
 
+/// The surface one pixel of the front layer shows, as `receiver` in
+/// `shaders/image_space_bindings.wgsl` finds it for the image-space techniques.
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    /// Its pixel.
+    pub pixel: IVec2,
+    /// Its front-layer texel: world-space unit normal and reverse-Z depth.
+    pub texel: NdTexel,
+    /// Its position, world space (metres).
+    pub world_position: Vec3,
+    /// Its position, view space (metres).
+    pub view_position: Vec3,
+    /// Its unit normal, view space.
+    pub view_normal: Vec3,
+}
+
 /// Both layers of an ND-buffer, row-major, top row first.
 #[derive(Clone, Debug)]
 pub struct NdBuffer {
@@ -142,6 +158,44 @@ impl NdBuffer {
             view.view_depth(view.world_position(px, py, self.width, self.height, deepest));
         let beyond = view.view_depth(x) - surface - tolerance;
         1.0 - (beyond / tolerance.max(1e-6)).clamp(0.0, 1.0)
+    }
+
+    /// The surface pixel (x, y) of the front layer shows; `None` outside the image and on the
+    /// background (no depth or no normal), where every technique writes "open".
+    pub fn receiver(&self, view: &ViewMatrices, x: i32, y: i32) -> Option<Receiver> {
+        let texel = self
+            .texel(false, x, y)
+            .filter(|t| t.depth > 0.0 && t.normal != Vec3::ZERO)?;
+        Some(Receiver {
+            pixel: IVec2::new(x, y),
+            texel,
+            world_position: view.world_position(x, y, self.width, self.height, texel.depth),
+            view_position: view.view_position(x, y, self.width, self.height, texel.depth),
+            view_normal: (view.view_from_world * texel.normal.extend(0.0))
+                .xyz()
+                .normalize(),
+        })
+    }
+
+    /// `f(x, y)` of every pixel, row-major.
+    pub fn per_pixel<T>(&self, mut f: impl FnMut(i32, i32) -> T) -> Vec<T> {
+        (0..self.width * self.height)
+            .map(|i| f((i % self.width) as i32, (i / self.width) as i32))
+            .collect()
+    }
+
+    /// `shade` of every receiver of the front layer, row-major; the default value (open) on
+    /// the background.
+    pub fn per_receiver<T: Default>(
+        &self,
+        view: &ViewMatrices,
+        mut shade: impl FnMut(&Receiver) -> T,
+    ) -> Vec<T> {
+        self.per_pixel(|x, y| {
+            self.receiver(view, x, y)
+                .map(|r| shade(&r))
+                .unwrap_or_default()
+        })
     }
 
     /// The texel of a layer at (x, y); `None` outside the image.

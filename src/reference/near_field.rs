@@ -40,14 +40,7 @@ pub fn near_field_occlusion(
     view: &ViewMatrices,
     inputs: &NearFieldInputs,
 ) -> Vec<f32> {
-    let mut out = vec![0.0; (nd.width * nd.height) as usize];
-    for y in 0..nd.height as i32 {
-        for x in 0..nd.width as i32 {
-            out[(y as u32 * nd.width + x as u32) as usize] =
-                pixel_occlusion(nd, view, inputs, x, y);
-        }
-    }
-    out
+    nd.per_pixel(|x, y| pixel_occlusion(nd, view, inputs, x, y))
 }
 
 /// Occlusion of one pixel.
@@ -59,14 +52,10 @@ pub fn pixel_occlusion(
     y: i32,
 ) -> f32 {
     let (w, h) = (nd.width, nd.height);
-    let Some(texel) = nd.texel(false, x, y) else {
+    let Some(receiver) = nd.receiver(view, x, y) else {
         return 0.0;
     };
-    let n = texel.normal;
-    if texel.depth <= 0.0 || n == Vec3::ZERO {
-        return 0.0;
-    }
-    let p = view.world_position(x, y, w, h, texel.depth);
+    let (p, n) = (receiver.world_position, receiver.texel.normal);
     let radius_px = inputs.radius / view.pixel_world_size(view.view_depth(p), h);
     let area = std::f32::consts::PI * radius_px * radius_px;
     let count = (area.min(4096.0).ceil() as u32).clamp(inputs.min_samples, inputs.max_samples);

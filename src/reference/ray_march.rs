@@ -1,4 +1,4 @@
-//! The ray-marched reference on the CPU, step for step as `ray_march/ray_march.wgsl` runs it.
+//! The ray-marched reference on the CPU, step for step as `ray_march/march.wgsl` runs it.
 
 use bevy::math::{IVec2, Vec3, Vec4Swizzles};
 
@@ -20,10 +20,6 @@ pub struct RayMarchInputs {
     pub steps: u32,
 }
 
-fn view_position(view: &ViewMatrices, pixel: IVec2, width: u32, height: u32, depth: f32) -> Vec3 {
-    view.view_position(pixel.x, pixel.y, width, height, depth)
-}
-
 /// 1 blocked (inside the solid the layers bound, or behind a sheet thinner than `step` that the
 /// previous step, at depth `previous_z`, lay in front of), 0 free, −1 left the screen.
 fn blocked(
@@ -39,7 +35,7 @@ fn blocked(
     if clip.w <= 0.0 {
         return -1;
     }
-    let ndc = clip.xy() / clip.w;
+    let ndc = clip.xyz() / clip.w;
     let q = IVec2::new(
         ((ndc.x + 1.0) * 0.5 * w as f32).floor() as i32,
         ((1.0 - ndc.y) * 0.5 * h as f32).floor() as i32,
@@ -47,18 +43,16 @@ fn blocked(
     let (Some(front), Some(back)) = (nd.texel(false, q.x, q.y), nd.texel(true, q.x, q.y)) else {
         return -1;
     };
-    if front.depth <= 0.0 {
+    // Stored reverse-Z depths, compared as the shader compares them (a larger depth is nearer).
+    if front.depth <= 0.0 || ndc.z >= front.depth {
         return 0;
     }
-    let front_z = view_position(view, q, w, h, front.depth).z;
-    if x.z >= front_z {
-        return 0;
-    }
+    let front_z = view.view_position(q.x, q.y, w, h, front.depth).z;
     if back.depth > 0.0 {
-        let back_z = view_position(view, q, w, h, back.depth).z;
-        if x.z > back_z {
+        if ndc.z > back.depth {
             return 1;
         }
+        let back_z = view.view_position(q.x, q.y, w, h, back.depth).z;
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return i32::from(crossed);
     }
@@ -71,21 +65,11 @@ pub fn ray_march_occlusion(
     view: &ViewMatrices,
     inputs: &RayMarchInputs,
 ) -> Vec<f32> {
-    (0..nd.width * nd.height)
-        .map(|i| {
-            pixel_occlusion(
-                nd,
-                view,
-                inputs,
-                (i % nd.width) as i32,
-                (i / nd.width) as i32,
-            )
-        })
-        .collect()
+    nd.per_pixel(|x, y| pixel_occlusion(nd, view, inputs, x, y))
 }
 
 /// How far above the surface at view-space `p` with normal `n` rays start, metres, where a pixel
-/// is `footprint` wide: `start_height` in `ray_march.wgsl`, which says why. Twice the least
+/// is `footprint` wide: `start_height` in `march.wgsl`, which says why. Twice the least
 /// height at which a step cannot read as behind the depth at the centre of the pixel it projects
 /// to, (footprint / 2) sin θ, θ between the normal and the direction to the eye.
 fn start_height(view: &ViewMatrices, p: Vec3, n: Vec3, footprint: f32) -> f32 {
@@ -107,16 +91,10 @@ pub fn pixel_occlusion(
     x: i32,
     y: i32,
 ) -> f32 {
-    let Some(texel) = nd.texel(false, x, y) else {
+    let Some(receiver) = nd.receiver(view, x, y) else {
         return 0.0;
     };
-    if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
-        return 0.0;
-    }
-    let p = view_position(view, IVec2::new(x, y), nd.width, nd.height, texel.depth);
-    let n = (view.view_from_world * texel.normal.extend(0.0))
-        .xyz()
-        .normalize();
+    let (p, n) = (receiver.view_position, receiver.view_normal);
     let frame = tangent_frame(n);
     let (t1, t2) = (frame.x_axis, frame.y_axis);
     let origin = p + n * start_height(view, p, n, view.pixel_world_size(-p.z, nd.height));

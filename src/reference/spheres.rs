@@ -173,46 +173,30 @@ pub fn far_field_channels(
     camera: &ProxyCamera,
 ) -> Vec<[f32; 2]> {
     let held = |x: Vec3, tolerance: f32| nd.holds(view, camera.use_back, x, tolerance);
-    let mut out = vec![[0.0; 2]; (nd.width * nd.height) as usize];
-    for y in 0..nd.height as i32 {
-        for x in 0..nd.width as i32 {
-            let Some(texel) = nd.texel(false, x, y) else {
-                continue;
-            };
-            if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
-                continue;
-            }
-            let p = view.world_position(x, y, nd.width, nd.height, texel.depth);
-            let (mut open, mut articulated_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
-            for occluder in occluders {
-                for proxy in &occluder.spheres {
-                    let (extent, reach) = influence(proxy, occluder.reach, camera.radius);
-                    if p.distance(proxy.center) > extent {
-                        continue;
-                    }
-                    let [a, b] = proxy_channels(
-                        proxy,
-                        p,
-                        texel.normal,
-                        reach,
-                        camera.near_radius,
-                        &held,
-                        &|x, f| view.seen_face(x, f),
-                    );
-                    open[0] *= 1.0 - a;
-                    open[1] *= 1.0 - b;
-                    if occluder.articulated {
-                        let both = 1.0 - (1.0 - a) * (1.0 - b);
-                        articulated_open *= 1.0 - both;
-                        largest = largest.max(both);
-                    }
+    nd.per_receiver(view, |receiver| {
+        let (p, n) = (receiver.world_position, receiver.texel.normal);
+        let (mut open, mut articulated_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
+        for occluder in occluders {
+            for proxy in &occluder.spheres {
+                let (extent, reach) = influence(proxy, occluder.reach, camera.radius);
+                if p.distance(proxy.center) > extent {
+                    continue;
+                }
+                let [a, b] =
+                    proxy_channels(proxy, p, n, reach, camera.near_radius, &held, &|x, f| {
+                        view.seen_face(x, f)
+                    });
+                open[0] *= 1.0 - a;
+                open[1] *= 1.0 - b;
+                if occluder.articulated {
+                    let both = 1.0 - (1.0 - a) * (1.0 - b);
+                    articulated_open *= 1.0 - both;
+                    largest = largest.max(both);
                 }
             }
-            out[(y as u32 * nd.width + x as u32) as usize] =
-                sphere_union([1.0 - open[0], 1.0 - open[1]], articulated_open, largest);
         }
-    }
-    out
+        sphere_union([1.0 - open[0], 1.0 - open[1]], articulated_open, largest)
+    })
 }
 
 /// The far field of sphere occluders alone, as compose writes it with the near field off:

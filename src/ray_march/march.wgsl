@@ -99,24 +99,23 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     if !r.shade {
         return;
     }
-    let pixel = r.pixel;
-    let size = r.size;
-    let dims = vec2<i32>(size);
+    // The march works in view space.
     let p = r.view_position;
     let n = r.view_normal;
+    let dims = vec2<i32>(r.size);
     let frame = tangent_frame(n);
     let t1 = frame[0];
     let t2 = frame[1];
 
     let radius = settings.image_space_radius;
-    let pattern = pixel_pattern(pixel, 0x2c1b3c6du, settings.frame_index);
+    let pattern = pixel_pattern(r.pixel, 0x2c1b3c6du, settings.frame_index);
     let rotation = pattern.rotation;
     let jitter = pattern.jitter;
     // Where along each step a sample sits: under accumulation it moves every frame, so a few
     // steps per frame add up to a fine march.
     let step_offset = frame_jitter(pattern.hash, settings.frame_index);
     let rows = depth_rows();
-    let origin = p + n * start_height(p, n, pixel_world_size(view, -p.z, size.y));
+    let origin = p + n * start_height(p, n, pixel_world_size(view, -p.z, r.size.y));
     let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
     let step = radius / f32(settings.ray_march_steps);
     let directions = settings.ray_march_directions;
@@ -136,7 +135,7 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
                 let t = (f32(s) + step_offset) / f32(settings.ray_march_steps) * radius;
                 let z = origin.z + dir.z * t;
                 let previous_z = origin.z + dir.z * max(t - step, 0.0);
-                let state = blocked(z, previous_z, step, clip + clip_dir * t, rows, size, dims, radius);
+                let state = blocked(z, previous_z, step, clip + clip_dir * t, rows, r.size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);
                     break;
