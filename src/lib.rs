@@ -101,7 +101,7 @@
 //! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` (T_clip's axis corrections, not in the paper: `fields/baker/axes.rs`) |
 //! | | §3.4 border rescale, interior fill | `fields/baker/paper.rs` |
 //! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
-//! | | ray-marched AO | `ray_march/ray_march.wgsl` |
+//! | | ray-marched AO | `ray_march/march.wgsl` |
 //! | | cross-bilateral blur | `filter/blur.wgsl` |
 //! | Reinbothe et al. 2009 | §5 voxelization | `voxels/voxelize.wgsl` |
 //! | | §6 eq. 2–3, rays through the grid, Wendland's kernel | `voxels/voxel_ao.wgsl`, `shaders/math.wgsl` |
@@ -115,6 +115,7 @@
 mod capabilities;
 pub mod compose;
 mod dispatch;
+mod draw_pipeline;
 pub mod fields;
 pub mod filter;
 pub mod geometry;
@@ -177,6 +178,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/cap_occlusion.wgsl");
         load_shader_library!(app, "shaders/proxy_occlusion.wgsl");
         load_shader_library!(app, "shaders/joint_upsample.wgsl");
+        load_shader_library!(app, "shaders/filter_output.wgsl");
 
         app.register_type::<DynamicAo>()
             .register_type::<readback::AoReadback>()

@@ -10,9 +10,9 @@ use bevy::render::{
     view::ViewTarget,
 };
 use bevy::shader::Shader;
-use bevy::utils::default;
 
 use super::{ParkedSsao, visibility_texture};
+use crate::draw_pipeline::overlay_pipeline;
 use crate::view::DynamicAoView;
 
 #[derive(Resource)]
@@ -44,21 +44,14 @@ impl SpecializedRenderPipeline for DebugViewPipeline {
     type Key = TextureFormat;
 
     fn specialize(&self, format: Self::Key) -> RenderPipelineDescriptor {
-        RenderPipelineDescriptor {
-            label: Some("dynamic_ao_debug_view_pipeline".into()),
-            layout: vec![self.layout.clone()],
-            vertex: self.fullscreen.to_vertex_state(),
-            fragment: Some(FragmentState {
-                shader: self.shader.clone(),
-                targets: vec![Some(ColorTargetState {
-                    format,
-                    blend: None,
-                    write_mask: ColorWrites::ALL,
-                })],
-                ..default()
-            }),
-            ..default()
-        }
+        overlay_pipeline(
+            "dynamic_ao_debug_view_pipeline",
+            &self.layout,
+            &self.fullscreen,
+            &self.shader,
+            format,
+            None,
+        )
     }
 }
 

@@ -16,6 +16,7 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::buffers::FieldBuffers;
+use crate::draw_pipeline::MULTIPLY_VISIBILITY;
 use crate::settings::FieldShading;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
@@ -58,12 +59,6 @@ impl FromWorld for FieldPipelines {
             ),
         );
         let shader = load_embedded_asset!(world, "fields.wgsl");
-        // dst × (1 − src): occluders multiply their visibilities (§3.3.2).
-        let multiply = BlendComponent {
-            src_factor: BlendFactor::Zero,
-            dst_factor: BlendFactor::OneMinusSrc,
-            operation: BlendOperation::Add,
-        };
         let cache = world.resource::<PipelineCache>();
         let [occlusion_only, cone] = [Vec::new(), vec!["CONE".into()]].map(|shader_defs| {
             cache.queue_render_pipeline(RenderPipelineDescriptor {
@@ -80,8 +75,8 @@ impl FromWorld for FieldPipelines {
                     targets: vec![Some(ColorTargetState {
                         format: FAR_OCCLUSION_FORMAT,
                         blend: Some(BlendState {
-                            color: multiply,
-                            alpha: multiply,
+                            color: MULTIPLY_VISIBILITY,
+                            alpha: MULTIPLY_VISIBILITY,
                         }),
                         write_mask: ColorWrites::RED | ColorWrites::GREEN,
                     })],

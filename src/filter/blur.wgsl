@@ -4,33 +4,18 @@
 // (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::filter_output::store_filtered
 #import bevy_dynamic_ao::nd_buffer::linear_depth
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth: texture_depth_2d;
 @group(0) @binding(3) var input: texture_2d<f32>;
-#ifdef VISIBILITY_R16FLOAT
-@group(0) @binding(4) var output: texture_storage_2d<r16float, write>;
-#else ifdef VISIBILITY
-@group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
-#else ifdef TWO_CHANNELS
-@group(0) @binding(4) var output: texture_storage_2d<rg32float, write>;
-#else
-@group(0) @binding(4) var output: texture_storage_2d<r32float, write>;
-#endif
+// Binding 4 is `output` (`shaders/filter_output.wgsl`).
 
-// Writes the blurred `value` of `pixel`: occlusion, or with VISIBILITY the visibility at the
-// viewport's place in Bevy's texture.
 fn store(pixel: vec2<i32>, value: vec2<f32>) {
-#ifdef VISIBILITY
-    let dims = vec2<u32>(textureDimensions(depth));
-    let at = visibility_pixel(settings, pixel, textureDimensions(output), dims);
-    textureStore(output, at, vec4<f32>(visibility_of(value.x)));
-#else
-    textureStore(output, pixel, vec4<f32>(value, 0.0, 0.0));
-#endif
+    store_filtered(settings, pixel, value, textureDimensions(depth));
 }
 
 // The channels a texel of `input` carries.

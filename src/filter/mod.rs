@@ -26,6 +26,7 @@
 //! would only have copied it: one full-resolution pass fewer, the same values
 //! (`DynamicAoView::filter_is_last`).
 
+mod bind_groups;
 mod node;
 mod pipeline;
 pub mod settings;
@@ -40,7 +41,8 @@ use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 use crate::view::{DynamicAoView, PendingPasses};
 
-pub(crate) use pipeline::{BlurBindGroups, BlurPipelines, FilterInputs};
+pub(crate) use bind_groups::{BlurBindGroups, FilterInputs};
+pub(crate) use pipeline::BlurPipelines;
 
 /// Registers the blur pipelines and passes.
 pub struct FilterPlugin;
@@ -60,7 +62,7 @@ impl Plugin for FilterPlugin {
             .add_systems(
                 Render,
                 (
-                    pipeline::prepare_blur_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    bind_groups::prepare_blur_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                     wait_for_filter.in_set(DynamicAoPrepare::Readiness),
                 ),
             )

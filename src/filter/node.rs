@@ -9,7 +9,8 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use super::pipeline::{BlurBindGroups, BlurPipelines, UpsampleBindGroup, VisibilityBindGroup};
+use super::bind_groups::{BlurBindGroups, UpsampleBindGroup, VisibilityBindGroup};
+use super::pipeline::BlurPipelines;
 use crate::compose::AoPassesReady;
 use crate::dispatch::{ComputeStep, record_passes};
 use crate::view::DynamicAoUniform;

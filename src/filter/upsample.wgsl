@@ -15,7 +15,8 @@
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth}
-#import bevy_dynamic_ao::uniform::{DynamicAoUniform, visibility_pixel, visibility_of}
+#import bevy_dynamic_ao::uniform::DynamicAoUniform
+#import bevy_dynamic_ao::filter_output::store_filtered
 #import bevy_dynamic_ao::math::wendland
 #import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
 #import bevy_dynamic_ao::history::unpack_history
@@ -30,26 +31,10 @@
 #else
 @group(0) @binding(4) var low: texture_2d<f32>;
 #endif
-#ifdef VISIBILITY_R16FLOAT
-@group(0) @binding(5) var output: texture_storage_2d<r16float, write>;
-#else ifdef VISIBILITY
-@group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
-#else ifdef TWO_CHANNELS
-@group(0) @binding(5) var output: texture_storage_2d<rg32float, write>;
-#else
-@group(0) @binding(5) var output: texture_storage_2d<r32float, write>;
-#endif
+// Binding 5 is `output` (`shaders/filter_output.wgsl`).
 
-// Writes the upsampled `value` of pixel `x`: occlusion, or with VISIBILITY the visibility at the
-// viewport's place in Bevy's texture.
 fn store(x: vec2<i32>, value: vec2<f32>) {
-#ifdef VISIBILITY
-    let dims = vec2<u32>(textureDimensions(depth_texture));
-    let at = visibility_pixel(settings, x, textureDimensions(output), dims);
-    textureStore(output, at, vec4<f32>(visibility_of(value.x)));
-#else
-    textureStore(output, x, vec4<f32>(value, 0.0, 0.0));
-#endif
+    store_filtered(settings, x, value, textureDimensions(depth_texture));
 }
 
 #ifndef GUIDE_TEXELS

@@ -16,6 +16,7 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::buffers::SphereBuffer;
+use crate::draw_pipeline::MULTIPLY_VISIBILITY;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
 };
@@ -45,12 +46,6 @@ impl FromWorld for SplatPipeline {
             ),
         );
         let shader = load_embedded_asset!(world, "splat.wgsl");
-        // dst × (1 − src): occluders multiply their visibilities.
-        let multiply = BlendComponent {
-            src_factor: BlendFactor::Zero,
-            dst_factor: BlendFactor::OneMinusSrc,
-            operation: BlendOperation::Add,
-        };
         // max(dst, src): the largest single occlusion of a skinned mesh's proxy, for the union
         // estimate in compose.
         let largest = BlendComponent {
@@ -73,7 +68,7 @@ impl FromWorld for SplatPipeline {
                         targets: vec![Some(ColorTargetState {
                             format: FAR_OCCLUSION_FORMAT,
                             blend: Some(BlendState {
-                                color: multiply,
+                                color: MULTIPLY_VISIBILITY,
                                 alpha: largest,
                             }),
                             write_mask: ColorWrites::ALL,

@@ -15,9 +15,9 @@ use bevy::render::{
     view::{ViewTarget, ViewUniform, ViewUniformOffset},
 };
 use bevy::shader::Shader;
-use bevy::utils::default;
 
 use super::buffers::{VoxelBuffers, VoxelParams};
+use crate::draw_pipeline::overlay_pipeline;
 use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, ViewBindings};
 
 #[derive(Resource)]
@@ -56,21 +56,14 @@ impl SpecializedRenderPipeline for ShowVoxelsPipeline {
     type Key = TextureFormat;
 
     fn specialize(&self, format: Self::Key) -> RenderPipelineDescriptor {
-        RenderPipelineDescriptor {
-            label: Some("dynamic_ao_show_voxels_pipeline".into()),
-            layout: vec![self.layout.clone()],
-            vertex: self.fullscreen.to_vertex_state(),
-            fragment: Some(FragmentState {
-                shader: self.shader.clone(),
-                targets: vec![Some(ColorTargetState {
-                    format,
-                    blend: Some(BlendState::ALPHA_BLENDING),
-                    write_mask: ColorWrites::ALL,
-                })],
-                ..default()
-            }),
-            ..default()
-        }
+        overlay_pipeline(
+            "dynamic_ao_show_voxels_pipeline",
+            &self.layout,
+            &self.fullscreen,
+            &self.shader,
+            format,
+            Some(BlendState::ALPHA_BLENDING),
+        )
     }
 }
 
