@@ -28,10 +28,11 @@
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field
-//! baked for every mesh; `voxels`: one `VoxelAoVolume` over what occludes the surfaces the
-//! camera sees within the radius, traced on the CPU, reaching the radius) and each image-space
-//! one, and `default`, with `+spheres`, `+fields` or `+voxels` added. Bevy's own SSAO (`bevy-ssao`) has a radius
-//! fixed in its shader (about 0.73 m); `--radius` applies to every other technique.
+//! baked for every mesh; `voxels`: one `VoxelAoVolume` over what occludes the surfaces the camera
+//! sees within the radius, traced on the CPU, reaching the radius: `volume.rs`) and each
+//! image-space one, and `default`, with `+spheres`, `+fields` or `+voxels` added. Bevy's own SSAO
+//! (`bevy-ssao`) has a radius fixed in its shader (about 0.73 m); `--radius` applies to every other
+//! technique.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -40,9 +41,11 @@ mod compare;
 mod far_terms;
 mod options;
 mod preflight;
+mod scene;
 mod timings;
 mod truth;
 mod undrawable;
+mod volume;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -52,21 +55,18 @@ use bevy::app::ScheduleRunnerPlugin;
 use bevy::asset::{AssetPlugin, LoadState};
 use bevy::camera::RenderTarget;
 use bevy::diagnostic::DiagnosticsStore;
-use bevy::gltf::{Gltf, GltfAssetLabel};
+use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy::render::{
     diagnostic::RenderDiagnosticsPlugin,
     gpu_readback::{Readback, ReadbackComplete},
-    render_resource::TextureFormat,
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
-use bevy::world_serialization::{WorldAsset, WorldAssetRoot, WorldInstanceReady};
+use bevy::world_serialization::WorldAsset;
 use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
-use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
-use bevy_dynamic_ao::reference::nd_buffer::{NdTexel, ViewMatrices};
+use bevy_dynamic_ao::reference::nd_buffer::ViewMatrices;
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
-use bevy_dynamic_ao::reference::posed::{descendants, posed_triangles_of};
 use options::{FarTerm, Options};
 
 /// Frames rendered once the scene is ready before `--timings` starts measuring (timestamps
@@ -139,8 +139,11 @@ fn main() {
         started: Instant::now(),
         truth_line: None,
     })
-    .add_systems(Startup, load_scene)
-    .add_systems(Update, (place_volume, write_truth, drive).chain())
+    .add_systems(Startup, scene::load_scene)
+    .add_systems(
+        Update,
+        (volume::place_volume, truth::write_truth, drive).chain(),
+    )
     .add_systems(
         PostUpdate,
         undrawable::neutralize_unplaceable_cameras
@@ -195,162 +198,6 @@ struct Capture {
     truth_line: Option<String>,
 }
 
-fn load_scene(mut commands: Commands, assets: Res<AssetServer>, mut capture: ResMut<Capture>) {
-    capture.gltf = assets.load(capture.file.clone());
-    capture.scene = assets.load(GltfAssetLabel::Scene(0).from_asset(capture.file.clone()));
-    let root = commands
-        .spawn(WorldAssetRoot(capture.scene.clone()))
-        .observe(scene_ready)
-        .id();
-    capture.root = Some(root);
-}
-
-/// Once the scene is spawned: pick its first camera, point it at our image, pose the animation.
-fn scene_ready(
-    ready: On<WorldInstanceReady>,
-    mut commands: Commands,
-    mut capture: ResMut<Capture>,
-    children: Query<&Children>,
-    cameras: Query<Option<&Projection>, With<Camera3d>>,
-    transforms: Query<(&Transform, Option<&ChildOf>)>,
-    meshes: Query<(
-        &Mesh3d,
-        Option<&Name>,
-        Has<bevy::mesh::skinning::SkinnedMesh>,
-    )>,
-    mesh_assets: Res<Assets<Mesh>>,
-    players: Query<Entity, With<AnimationPlayer>>,
-    gltfs: Res<Assets<Gltf>>,
-    mut graphs: ResMut<Assets<AnimationGraph>>,
-    mut images: ResMut<Assets<Image>>,
-) {
-    // Depth-first in node order: the first camera of the glTF file.
-    let mut stack = vec![ready.entity];
-    let mut found = Vec::new();
-    while let Some(entity) = stack.pop() {
-        if cameras.contains(entity) {
-            found.push(entity);
-        }
-        if let Ok(kids) = children.get(entity) {
-            stack.extend(kids.iter().rev());
-        }
-    }
-    let Some((&camera, others)) = found.split_first() else {
-        capture.failure = Some(format!("{} has no camera", capture.options.scene.display()));
-        return;
-    };
-    if undrawable::unplaceable(camera, &transforms) {
-        capture.failure = Some(format!(
-            "{}: the first camera's node has a zero scale or a value that is not finite in its \
-             transform (or in an ancestor's), so it has no view direction",
-            capture.options.scene.display()
-        ));
-        return;
-    }
-    undrawable::leave_out_undrawable(
-        &mut commands,
-        ready.entity,
-        &children,
-        &meshes,
-        &mesh_assets,
-    );
-    for &other in others {
-        commands.entity(other).insert(Camera {
-            is_active: false,
-            ..default()
-        });
-    }
-    let options = &capture.options;
-    let size = UVec2::new(options.width, options.height);
-    let target = images.add(Image::new_target_texture(
-        size.x,
-        size.y,
-        TextureFormat::Rgba8UnormSrgb,
-        None,
-    ));
-    let readback = AoReadback::new(&mut images, size);
-    if let Some(out) = options.compare.clone() {
-        let projection = cameras
-            .get(camera)
-            .ok()
-            .flatten()
-            .cloned()
-            .unwrap_or_default();
-        capture.compare = Some(compare::Compare::spawn_peers(
-            &mut commands,
-            &mut images,
-            camera,
-            projection,
-            target.clone(),
-            size,
-            compare::lit(),
-            out,
-        ));
-    }
-    let options = &capture.options;
-    commands.entity(camera).insert((
-        compare::lit(),
-        RenderTarget::Image(target.into()),
-        Msaa::from_samples(options.msaa),
-        DynamicAo {
-            technique: options.technique,
-            radius: options.radius,
-            blur: AoBlur {
-                radius: options.blur,
-                ..default()
-            },
-            half_resolution: options.half_resolution
-                || (options.default_technique && options.preset.half_resolution()),
-            spheres: options.far == Some(FarTerm::Spheres),
-            fields: options.far == Some(FarTerm::Fields),
-            voxels: options.far == Some(FarTerm::Voxels),
-            far_field_blend: options.far_blend,
-            temporal: options.temporal,
-            // Every technique's budget at the chosen level.
-            ..DynamicAo::from_preset(options.preset)
-        },
-        readback.clone(),
-    ));
-    if let Some(term @ (FarTerm::Fields | FarTerm::Spheres)) = options.far {
-        // Every mesh of the scene an occluder (fields are baked on load, or read from the disk
-        // cache, each in its mesh's own space).
-        let scene_meshes: Vec<Entity> = children
-            .iter_descendants(ready.entity)
-            .filter(|e| {
-                meshes.get(*e).is_ok_and(|(mesh, _, _)| {
-                    mesh_assets
-                        .get(&mesh.0)
-                        .is_none_or(|m| undrawable::why_undrawable(m).is_none())
-                })
-            })
-            .collect();
-        term.attach(&mut commands, &scene_meshes, (Vec3::ZERO, Vec3::ZERO), 0.0);
-    }
-    capture.readback = Some(readback);
-
-    if let Some(clip) = gltfs
-        .get(&capture.gltf)
-        .and_then(|gltf| gltf.animations.first().cloned())
-    {
-        let (graph, node) = AnimationGraph::from_clip(clip);
-        let graph = graphs.add(graph);
-        let time = capture.options.time;
-        for player in &players {
-            commands
-                .entity(player)
-                .insert(AnimationGraphHandle(graph.clone()));
-            commands.queue(move |world: &mut World| {
-                if let Some(mut player) = world.get_mut::<AnimationPlayer>(player) {
-                    player.play(node).seek_to(time).pause();
-                }
-            });
-        }
-    }
-    let until = capture.frames + capture.options.frames;
-    capture.stage = Stage::Rendering { until };
-    capture.stage_start = capture.frames;
-}
-
 /// The view and projection of the camera the capture renders through.
 fn capture_view(world: &mut World) -> Option<ViewMatrices> {
     world
@@ -360,123 +207,6 @@ fn capture_view(world: &mut World) -> Option<ViewMatrices> {
         .map(|(transform, camera)| {
             ViewMatrices::new(transform.to_matrix(), camera.clip_from_view())
         })
-}
-
-/// `--out-truth`: once the capture is read, traces the posed scene through its camera on the CPU
-/// and writes the result beside it (`truth.rs`).
-fn write_truth(world: &mut World) {
-    let capture = world.resource::<Capture>();
-    let (Some(out), Some(captured), None, Some(root)) = (
-        capture.options.out_truth.clone(),
-        capture.visibility.clone(),
-        capture.truth_line.as_ref(),
-        capture.root,
-    ) else {
-        return;
-    };
-    let (width, height) = (capture.options.width, capture.options.height);
-    let radius = capture.options.radius;
-    let below = descendants(world, root);
-    let scene = posed_triangles_of(world, |e| below.contains(&e));
-    let Some(view) = capture_view(world) else {
-        return;
-    };
-    let bvh = Bvh::new(scene.triangles);
-    let truth = truth::trace(&bvh, &view, (width, height), radius, &captured);
-    let mut capture = world.resource_mut::<Capture>();
-    if let Err(err) = write_visibility_png(&out, width, height, &truth.visibility) {
-        capture.failure = Some(format!("cannot write {}: {err}", out.display()));
-        return;
-    }
-    capture.truth_line = Some(format!(
-        "ground truth: {} (CPU ray tracer, {} rays per pixel, R = {radius}); RMSE of the capture \
-         {:.4} over the {} pixels that show geometry",
-        out.display(),
-        truth::RAYS_PER_PIXEL,
-        truth.rmse,
-        truth.pixels
-    ));
-}
-
-/// Frames rendered before the view's surfaces are read to place the voxel volume.
-const FRAMES_BEFORE_PLACING: u32 = 3;
-
-/// `--technique voxels`: one volume over what occludes the surfaces the camera sees within the
-/// radius (`far_terms::occluder_bounds`, traced on the CPU against the posed scene), so its
-/// cells are as fine as the occlusion allows; its rays reach as far as the radius. The view's
-/// surfaces come from the front layer of the ND-buffer after a few frames. Where nothing
-/// occludes them, the volume covers the whole scene.
-fn place_volume(world: &mut World) {
-    let capture = world.resource::<Capture>();
-    let (Stage::Rendering { .. }, Some(FarTerm::Voxels), None, Some(root), Some(readback)) = (
-        capture.stage,
-        capture.options.far,
-        capture.volume,
-        capture.root,
-        capture.readback.clone(),
-    ) else {
-        return;
-    };
-    let Some(placing) = capture.placing.clone() else {
-        if capture.frames >= capture.stage_start + FRAMES_BEFORE_PLACING {
-            let front: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
-            let store = front.clone();
-            world
-                .spawn(Readback::texture(readback.front.clone()))
-                .observe(move |done: On<ReadbackComplete>, mut commands: Commands| {
-                    *store.lock().unwrap() = Some(done.data.clone());
-                    commands.entity(done.entity).despawn();
-                });
-            world.resource_mut::<Capture>().placing = Some(front);
-        }
-        return;
-    };
-    let Some(bytes) = placing.lock().unwrap().take() else {
-        return;
-    };
-    let (width, height) = (capture.options.width, capture.options.height);
-    let radius = capture.options.radius;
-    let falloff = capture.options.voxel_falloff;
-    let texels: Vec<NdTexel> = common::unpad_f32(&bytes, width as usize, height as usize, 4)
-        .chunks_exact(4)
-        .map(|c| NdTexel::from_rgba([c[0], c[1], c[2], c[3]]))
-        .collect();
-    let below = descendants(world, root);
-    let scene = posed_triangles_of(world, |e| below.contains(&e));
-    let (lo, hi) = scene.bounds();
-    if !lo.is_finite() || !hi.is_finite() {
-        world.resource_mut::<Capture>().failure = Some("the scene has no triangles".into());
-        return;
-    }
-    let view = capture_view(world);
-    let bvh = Bvh::new(scene.triangles);
-    let region = view
-        .and_then(|view| far_terms::occluder_bounds(&bvh, &texels, width, height, &view, radius))
-        .unwrap_or((lo, hi));
-    let meshes: Vec<Entity> = below
-        .iter()
-        .copied()
-        .filter(|e| world.get::<Mesh3d>(*e).is_some())
-        .collect();
-    let mut commands = world.commands();
-    let volume = FarTerm::Voxels.attach(
-        &mut commands,
-        &meshes,
-        region,
-        far_terms::VOXEL_MARGIN * radius,
-    );
-    world.flush();
-    if let Some(volume) = volume
-        && let Some(mut settings) = world.get_mut::<VoxelAoVolume>(volume)
-    {
-        settings.falloff = falloff;
-    }
-    let mut capture = world.resource_mut::<Capture>();
-    capture.volume = volume;
-    // The frames to render start now that the volume exists.
-    capture.stage = Stage::Rendering {
-        until: capture.frames + capture.options.frames,
-    };
 }
 
 fn drive(

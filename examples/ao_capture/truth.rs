@@ -5,12 +5,17 @@
 //! skinned and morphed on the CPU), through the capture's camera, and is written as the capture
 //! is (16-bit linear visibility, 65535 where no geometry is).
 
+use bevy::prelude::*;
 use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::reference::ground_truth::{
     GroundTruthSettings, geometry_mask, ground_truth_visibility,
 };
 use bevy_dynamic_ao::reference::metrics::rmse;
 use bevy_dynamic_ao::reference::nd_buffer::ViewMatrices;
+use bevy_dynamic_ao::reference::png16::write_visibility_png;
+use bevy_dynamic_ao::reference::posed::{descendants, posed_triangles_of};
+
+use crate::{Capture, capture_view};
 
 /// Hemisphere rays per pixel, as the crate's ground-truth tests trace.
 pub const RAYS_PER_PIXEL: u32 = 256;
@@ -46,4 +51,40 @@ pub fn trace(
         pixels: mask.iter().filter(|m| **m).count(),
         visibility,
     }
+}
+
+/// `--out-truth`: once the capture is read, traces the posed scene through its camera on the CPU
+/// and writes the result beside it (`truth.rs`).
+pub fn write_truth(world: &mut World) {
+    let capture = world.resource::<Capture>();
+    let (Some(out), Some(captured), None, Some(root)) = (
+        capture.options.out_truth.clone(),
+        capture.visibility.clone(),
+        capture.truth_line.as_ref(),
+        capture.root,
+    ) else {
+        return;
+    };
+    let (width, height) = (capture.options.width, capture.options.height);
+    let radius = capture.options.radius;
+    let below = descendants(world, root);
+    let scene = posed_triangles_of(world, |e| below.contains(&e));
+    let Some(view) = capture_view(world) else {
+        return;
+    };
+    let bvh = Bvh::new(scene.triangles);
+    let truth = trace(&bvh, &view, (width, height), radius, &captured);
+    let mut capture = world.resource_mut::<Capture>();
+    if let Err(err) = write_visibility_png(&out, width, height, &truth.visibility) {
+        capture.failure = Some(format!("cannot write {}: {err}", out.display()));
+        return;
+    }
+    capture.truth_line = Some(format!(
+        "ground truth: {} (CPU ray tracer, {} rays per pixel, R = {radius}); RMSE of the capture \
+         {:.4} over the {} pixels that show geometry",
+        out.display(),
+        RAYS_PER_PIXEL,
+        truth.rmse,
+        truth.pixels
+    ));
 }

@@ -12,7 +12,7 @@ use bevy_dynamic_ao::reference::{
     png16::read_visibility_png,
 };
 
-use super::{run, scene_path, temp_dir};
+use super::{run_ok, scene_path, temp_dir};
 use crate::gltf_scene::{self, NodeKind};
 
 /// The generated scene posed at `time`, as triangles, and its camera.
@@ -89,12 +89,7 @@ fn captures_the_generated_scene_close_to_ground_truth() {
             out_color.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        let out = run(&args);
-        assert!(
-            out.status.success(),
-            "ao_capture failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = run_ok(&args);
         assert!(out_color.is_file(), "--out-color wrote nothing");
         let (iw, ih, ao) = read_visibility_png(&out_ao).expect("a 16-bit grayscale PNG");
         assert_eq!((iw, ih), (w, h));
@@ -209,12 +204,7 @@ fn captures_the_far_field_of_the_generated_scene() {
             out_ao.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        let out = run(&args);
-        assert!(
-            out.status.success(),
-            "ao_capture {technique} failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = run_ok(&args);
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(
             stdout.contains(&format!("technique {technique} ")),

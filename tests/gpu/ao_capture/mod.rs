@@ -27,6 +27,18 @@ fn run(args: &[&str]) -> Output {
         .expect("ao_capture runs")
 }
 
+/// `run`, asserting that the capture succeeded (its error output in the message otherwise).
+fn run_ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "ao_capture {} failed:\n{}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cube_on_plane.glb")
 }

@@ -3,7 +3,7 @@
 use bevy::prelude::*;
 use bevy_dynamic_ao::reference::png16::read_visibility_png;
 
-use super::{run, scene_path, temp_dir};
+use super::{run, run_ok, scene_path, temp_dir};
 
 #[test]
 fn default_technique_and_timings() {
@@ -29,12 +29,7 @@ fn default_technique_and_timings() {
         .collect::<Vec<_>>();
         args.extend(extra.iter().map(|a| a.to_string()));
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let out = run(&args);
-        assert!(
-            out.status.success(),
-            "ao_capture failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = run_ok(&args);
         let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
         (read_visibility_png(&out_ao).expect("a PNG").2, stdout)
     };
@@ -131,7 +126,7 @@ fn compare_writes_ours_bevys_and_none_side_by_side() {
         dir.join("color.png"),
         dir.join("compare.png"),
     );
-    let out = run(&[
+    run_ok(&[
         "--scene",
         scene_path().to_str().unwrap(),
         "--width",
@@ -149,11 +144,6 @@ fn compare_writes_ours_bevys_and_none_side_by_side() {
         "--compare",
         compare.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "ao_capture --compare failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     // Three 160 × 120 images with 4 white pixels between them.
     let luma = crate::examples::image_luma(&compare);
     let width = 3 * 160 + 8;
