@@ -2,7 +2,8 @@
 //! and MSAA toggle and `DynamicAo` comes and goes (see `run.rs` for the schedule). Prints process
 //! RSS and the plugin's GPU bytes at checkpoints as a Markdown table, then the RSS growth from the
 //! warm checkpoint (a fifth of the way) to the end and the largest GPU bytes seen, and exits with
-//! code 1 when either passes its bound.
+//! code 1 when either passes its bound. It runs itself again with glibc's allocator limited to one
+//! arena (`run::ONE_ARENA` says why).
 //!
 //! `cargo bench --profile dev --bench soak` (`-- --frames N` for another length,
 //! `-- --without-spheres` to keep the sphere term off). CI runs 1,000 frames as the GPU test
@@ -13,6 +14,14 @@ mod common;
 mod run;
 
 fn main() {
+    if !run::in_one_arena() {
+        let status = std::process::Command::new(std::env::current_exe().expect("own path"))
+            .args(std::env::args_os().skip(1))
+            .env(run::ONE_ARENA.0, run::ONE_ARENA.1)
+            .status()
+            .expect("the soak runs itself again with one allocator arena");
+        std::process::exit(status.code().unwrap_or(1));
+    }
     let mut frames = 10_000;
     let mut spheres = true;
     let mut args = std::env::args().skip(1);
