@@ -15,9 +15,7 @@ mod run;
 
 fn main() {
     if !run::in_one_arena() {
-        let status = std::process::Command::new(std::env::current_exe().expect("own path"))
-            .args(std::env::args_os().skip(1))
-            .env(run::ONE_ARENA.0, run::ONE_ARENA.1)
+        let status = run::again_in_one_arena(std::env::args_os().skip(1))
             .status()
             .expect("the soak runs itself again with one allocator arena");
         std::process::exit(status.code().unwrap_or(1));

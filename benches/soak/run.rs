@@ -52,9 +52,21 @@ pub struct Sample {
 /// keeps, not which threads kept it.
 pub const ONE_ARENA: (&str, &str) = ("MALLOC_ARENA_MAX", "1");
 
-/// Whether this process runs in [`ONE_ARENA`]; if not, the caller runs itself again in it.
+/// Whether this process runs in [`ONE_ARENA`]; if not, the caller runs itself again in it
+/// ([`again_in_one_arena`]).
 pub fn in_one_arena() -> bool {
     std::env::var_os(ONE_ARENA.0).is_some()
+}
+
+/// This executable with `args`, in [`ONE_ARENA`].
+pub fn again_in_one_arena<I, S>(args: I) -> std::process::Command
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let mut command = std::process::Command::new(std::env::current_exe().expect("own path"));
+    command.args(args).env(ONE_ARENA.0, ONE_ARENA.1);
+    command
 }
 
 /// Most the RSS may grow from the warm checkpoint to the end, bytes.

@@ -17,22 +17,23 @@ fn a_thousand_frames_of_changes_stay_bounded() {
         .unwrap_or_else(|poisoned| poisoned.into_inner());
     if !run::in_one_arena() {
         // Its own process, in one allocator arena (`run::ONE_ARENA` says why), this test alone.
-        let output = std::process::Command::new(std::env::current_exe().expect("own path"))
-            .args([
-                "--exact",
-                "soak::a_thousand_frames_of_changes_stay_bounded",
-                "--nocapture",
-            ])
-            .env(run::ONE_ARENA.0, run::ONE_ARENA.1)
+        let name = "soak::a_thousand_frames_of_changes_stay_bounded";
+        let output = run::again_in_one_arena(["--exact", name, "--nocapture"])
             .output()
             .expect("the test runs itself again");
-        print!("{}", String::from_utf8_lossy(&output.stdout));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        print!("{stdout}");
         let stderr = String::from_utf8_lossy(&output.stderr);
         let tail: Vec<&str> = stderr.lines().rev().take(30).collect();
         assert!(
             output.status.success(),
             "the soak failed: {}",
             tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        );
+        // A filter that matched nothing would also succeed.
+        assert!(
+            stdout.contains(&format!("test {name} ... ok")),
+            "the run in one arena did not run {name}"
         );
         return;
     }
