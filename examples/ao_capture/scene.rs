@@ -114,7 +114,7 @@ fn scene_ready(
             radius: options.radius,
             blur: AoBlur {
                 radius: options.blur,
-                ..default()
+                sharpness: options.blur_sharpness,
             },
             half_resolution: options.half_resolution
                 || (options.default_technique && options.preset.half_resolution()),

@@ -10,7 +10,7 @@ use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::reference::ground_truth::{
     GroundTruthSettings, geometry_mask, ground_truth_visibility,
 };
-use bevy_dynamic_ao::reference::metrics::rmse;
+use bevy_dynamic_ao::reference::metrics::{high_frequency_error, rmse};
 use bevy_dynamic_ao::reference::nd_buffer::ViewMatrices;
 use bevy_dynamic_ao::reference::png16::write_visibility_png;
 use bevy_dynamic_ao::reference::posed::{descendants, posed_triangles_of};
@@ -26,6 +26,10 @@ pub struct Truth {
     pub visibility: Vec<f32>,
     /// RMSE of the capture's visibility over the pixels that show geometry.
     pub rmse: f32,
+    /// RMSE, over the same pixels, of the capture's fine detail against the truth's: each image
+    /// minus its Gaussian blur at σ = 2 pixels (`reference::metrics::high_frequency_error`).
+    /// Blur that smears detail the truth has raises it, as does noise the truth lacks.
+    pub high_frequency: f32,
     /// How many pixels show geometry.
     pub pixels: usize,
 }
@@ -48,6 +52,7 @@ pub fn trace(
     let mask = geometry_mask(bvh, view, width, height);
     Truth {
         rmse: rmse(captured, &visibility, Some(&mask)),
+        high_frequency: high_frequency_error(captured, &visibility, width, height, Some(&mask)),
         pixels: mask.iter().filter(|m| **m).count(),
         visibility,
     }
@@ -81,10 +86,11 @@ pub fn write_truth(world: &mut World) {
     }
     capture.truth_line = Some(format!(
         "ground truth: {} (CPU ray tracer, {} rays per pixel, R = {radius}); RMSE of the capture \
-         {:.4} over the {} pixels that show geometry",
+         {:.4} over the {} pixels that show geometry; high-frequency error {:.4}",
         out.display(),
         RAYS_PER_PIXEL,
         truth.rmse,
-        truth.pixels
+        truth.pixels,
+        truth.high_frequency
     ));
 }

@@ -7,7 +7,7 @@ use bevy::prelude::*;
 use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::reference::{
     ground_truth::{GroundTruthSettings, geometry_mask, ground_truth_visibility},
-    metrics::rmse,
+    metrics::{high_frequency_error, rmse},
     nd_buffer::ViewMatrices,
     png16::read_visibility_png,
 };
@@ -132,6 +132,17 @@ fn captures_the_generated_scene_close_to_ground_truth() {
     assert!(
         (printed - over_geometry).abs() < 0.001,
         "printed RMSE {printed} against {over_geometry} over the geometry pixels"
+    );
+    let printed_detail: f32 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("ground truth: "))
+        .and_then(|l| l.split("high-frequency error ").nth(1))
+        .and_then(|number| number.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no high-frequency error in:\n{stdout}"));
+    let detail = high_frequency_error(&ours, &truth, w, h, Some(&geometry));
+    assert!(
+        detail > 0.0 && (printed_detail - detail).abs() < 0.001,
+        "printed high-frequency error {printed_detail} against {detail} over the geometry pixels"
     );
     // Where ground truth sees no geometry, the capture must say open.
     let sky: Vec<bool> = geometry.iter().map(|g| !g).collect();

@@ -107,6 +107,14 @@ fn bad_input_gives_a_one_line_error() {
         (
             [
                 base(&["--scene", scene]),
+                vec!["--blur-sharpness".into(), "NaN".into()],
+            ]
+            .concat(),
+            "--blur-sharpness takes a number",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
                 vec!["--technique".into(), "magic".into()],
             ]
             .concat(),
