@@ -263,6 +263,15 @@ fn captures_the_far_field_of_the_generated_scene() {
         // What `DynamicAo::default()` runs (the accumulated ray march) with each term joined.
         let default = error(&capture("default", radius, &[]));
         println!("ao_capture, R = {radius} m: default RMSE {default:.4}");
+        // Measured: 0.0136 at 0.75 m, 0.0488 at 2 m. The scene's floor is a slab: with each
+        // pixel's farthest back face in the ray march's layer, the air between a box and the
+        // slab's underside behind it read as solid, and this read 0.0467 / 0.0560 (BENCHMARKS.md,
+        // "DamagedHelmet close up", tried and not kept).
+        let bound = if radius < 1.0 { 0.016 } else { 0.052 };
+        assert!(
+            default < bound,
+            "the default at {radius} m: RMSE {default:.4} against ground truth"
+        );
         for term in ["spheres", "fields", "voxels"] {
             let joined = error(&capture(&format!("default+{term}"), radius, &[]));
             println!("  default+{term} {joined:.4}");
