@@ -4,7 +4,8 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--blur-sharpness S] [--half-res] [--far-blend count-once|add|max] \
+//!     [--blur-sharpness S] [--blur-normal-sharpness S] [--half-res] \
+//!     [--far-blend count-once|add|max] \
 //!     [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
 //!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]

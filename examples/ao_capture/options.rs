@@ -10,7 +10,7 @@ use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--blur-sharpness S] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -89,6 +89,8 @@ pub struct Options {
     pub blur: u32,
     /// Depth sharpness of the cross-bilateral blur (`AoBlur::sharpness`, no unit).
     pub blur_sharpness: f32,
+    /// Normal sharpness of the cross-bilateral blur (`AoBlur::normal_sharpness`, no unit).
+    pub blur_normal_sharpness: f32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
     /// Frames rendered after the scene is posed, before the capture (default: 4, or twice the
@@ -133,6 +135,7 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoPreset::default(), None, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut blur_sharpness = AoBlur::default().sharpness;
+        let mut blur_normal_sharpness = AoBlur::default().normal_sharpness;
         let mut half_resolution = false;
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
@@ -213,6 +216,13 @@ impl Options {
                     blur_sharpness = parse_number("--blur-sharpness", &value()?, 0.0f32)?;
                     if blur_sharpness.is_infinite() {
                         return Err("--blur-sharpness takes a finite number".to_string());
+                    }
+                }
+                "--blur-normal-sharpness" => {
+                    blur_normal_sharpness =
+                        parse_number("--blur-normal-sharpness", &value()?, 0.0f32)?;
+                    if blur_normal_sharpness.is_infinite() {
+                        return Err("--blur-normal-sharpness takes a finite number".to_string());
                     }
                 }
                 "--time" => {
@@ -296,6 +306,7 @@ impl Options {
             preset,
             blur,
             blur_sharpness,
+            blur_normal_sharpness,
             half_resolution,
             frames: frames.unwrap_or_else(|| {
                 if temporal.unwrap_or(preset.temporal()).enabled {

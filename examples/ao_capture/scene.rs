@@ -115,6 +115,7 @@ fn scene_ready(
             blur: AoBlur {
                 radius: options.blur,
                 sharpness: options.blur_sharpness,
+                normal_sharpness: options.blur_normal_sharpness,
             },
             half_resolution: options.half_resolution
                 || (options.default_technique && options.preset.half_resolution()),

@@ -16,9 +16,13 @@ pub(crate) struct FilterInputs<'a> {
     pub view: BindingResource<'a>,
     pub settings: BindingResource<'a>,
     pub depth: &'a TextureView,
+    /// The normals the blur weighs by ([`DynamicAoTextures::blur_normal`]); the voxel term's
+    /// blur weighs by depth alone, and any float texture stands in.
+    pub normal: &'a TextureView,
 }
 
-/// The bind group of an upsampling pass over `layout`: `low` (half size) into `full`.
+/// The bind group of an upsampling pass over `layout`: `low` (half size) into `full`, and where
+/// `blur_normals` is given, the front layer's `normal` copied there for the blur.
 fn upsample_bind_group(
     device: &RenderDevice,
     pipeline_cache: &PipelineCache,
@@ -27,19 +31,21 @@ fn upsample_bind_group(
     inputs: &FilterInputs,
     normal: &TextureView,
     [low, full]: [&TextureView; 2],
+    blur_normals: Option<&TextureView>,
 ) -> BindGroup {
-    device.create_bind_group(
-        label,
-        &pipeline_cache.get_bind_group_layout(layout),
-        &BindGroupEntries::sequential((
-            inputs.view.clone(),
-            inputs.settings.clone(),
-            inputs.depth,
-            normal,
-            low,
-            full,
-        )),
-    )
+    let layout = pipeline_cache.get_bind_group_layout(layout);
+    let mut entries = DynamicBindGroupEntries::sequential((
+        inputs.view.clone(),
+        inputs.settings.clone(),
+        inputs.depth,
+        normal,
+        low,
+        full,
+    ));
+    if let Some(blur_normals) = blur_normals {
+        entries = entries.extend_sequential((blur_normals,));
+    }
+    device.create_bind_group(label, &layout, &entries)
 }
 
 impl FilterPipelines {
@@ -62,6 +68,7 @@ impl FilterPipelines {
             inputs,
             normal,
             textures,
+            None,
         )
     }
 
@@ -83,6 +90,7 @@ impl FilterPipelines {
                     inputs.view.clone(),
                     inputs.settings.clone(),
                     inputs.depth,
+                    inputs.normal,
                     input,
                     output,
                 )),
@@ -141,7 +149,7 @@ pub(crate) fn prepare_blur_bind_groups(
     };
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
     for (entity, textures, prepass, view, resources, parked, history) in &views {
-        let Some(depth) = prepass.depth() else {
+        let (Some(depth), Some(front_normal)) = (prepass.depth(), prepass.normal()) else {
             commands.entity(entity).remove::<(
                 UpsampleBindGroup,
                 BlurBindGroups,
@@ -154,9 +162,10 @@ pub(crate) fn prepare_blur_bind_groups(
             view: view_binding.clone(),
             settings: settings_binding.clone(),
             depth,
+            normal: &textures.blur_normal.default_view,
         };
         let occlusion = &textures.full_occlusion.default_view;
-        let half_normal = prepass.normal().filter(|_| view.half_resolution);
+        let half_normal = Some(front_normal).filter(|_| view.half_resolution);
         // The history the temporal pass writes this frame, where it runs (it runs wherever the
         // technique writes a raw buffer for it).
         let guide = history
@@ -164,7 +173,13 @@ pub(crate) fn prepare_blur_bind_groups(
             .map(TemporalHistory::written);
         // The bind group of an upsampling from `low` (half size) into `output` over `layout`, or,
         // where there is a guide and `guided` has compiled, of the guided one; and which it is.
-        let upsample = |layout, guided: Option<&GuidedUpsample>, low, output, label| {
+        // Where `blur_normals` is given, the upsampling copies the front layer's normals there.
+        let upsample = |layout,
+                        guided: Option<&GuidedUpsample>,
+                        low,
+                        output,
+                        blur_normals: Option<&TextureView>,
+                        label| {
             let guided = guided.filter(|g| ready(g.pipeline)).zip(guide);
             let (layout, low) = guided.map_or((layout, low), |(g, history)| (&g.layout, history));
             let bind_group = half_normal.map(|normal| {
@@ -177,6 +192,7 @@ pub(crate) fn prepare_blur_bind_groups(
                     &inputs,
                     normal,
                     textures,
+                    blur_normals,
                 )
             });
             bind_group.map(|bind_group| (bind_group, guided.is_some()))
@@ -184,11 +200,13 @@ pub(crate) fn prepare_blur_bind_groups(
         let low = &textures.near_occlusion.default_view;
         let one = &pipelines.one;
         let label = "dynamic_ao_upsample_bind_group";
+        let blur_normals = Some(&textures.blur_normal.default_view);
         match upsample(
             &one.upsample_layout,
             one.guided.as_ref(),
             low,
             occlusion,
+            blur_normals,
             label,
         ) {
             Some((bind_group, guided)) => {
@@ -213,6 +231,7 @@ pub(crate) fn prepare_blur_bind_groups(
                         inputs.view.clone(),
                         inputs.settings.clone(),
                         inputs.depth,
+                        inputs.normal,
                         &textures.blur_scratch.default_view,
                         visibility,
                     )),
@@ -224,6 +243,7 @@ pub(crate) fn prepare_blur_bind_groups(
                 Some(&to_visibility.guided),
                 low,
                 visibility,
+                None,
                 "dynamic_ao_upsample_visibility_bind_group",
             )
             .map(|(bind_group, guided)| VisibilityBindGroup { bind_group, guided }),

@@ -1,18 +1,22 @@
 // Separable cross-bilateral blur of the occlusion buffer (Bavoil & Sainz 2008, "Cross Bilateral
-// Filter"), of one channel or, with TWO_CHANNELS, of the two of far-field occlusion. With
-// VISIBILITY the Y pass writes the texture Bevy's PBR reads, as compose would have
-// (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
+// Filter"), of one channel or, with TWO_CHANNELS, of the two of far-field occlusion. Each tap is
+// weighted by its distance, its depth difference and, for one channel, the angle between its
+// normal and the centre's: the paper's depth weight alone carries occlusion across creases and
+// panel lines, where the depth hardly changes. With VISIBILITY the Y pass writes the texture
+// Bevy's PBR reads, as compose would have (`DynamicAoView::filter_is_last`). `reference::filter`
+// is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::filter_output::store_filtered
-#import bevy_dynamic_ao::nd_buffer::linear_depth
+#import bevy_dynamic_ao::nd_buffer::{linear_depth, decode_normal}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
 @group(0) @binding(2) var depth: texture_depth_2d;
-@group(0) @binding(3) var input: texture_2d<f32>;
-// Binding 4 is `output` (`shaders/filter_output.wgsl`).
+@group(0) @binding(3) var normal: texture_2d<f32>;
+@group(0) @binding(4) var input: texture_2d<f32>;
+// Binding 5 is `output` (`shaders/filter_output.wgsl`).
 
 fn store(pixel: vec2<i32>, value: vec2<f32>) {
     store_filtered(settings, pixel, value, textureDimensions(depth));
@@ -44,11 +48,18 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
     }
     let z0 = depth_ahead(center_depth);
 #ifdef TWO_CHANNELS
-    // The voxel term's (see `DynamicAoUniform::voxel_blur_radius`).
+    // The voxel term's (see `DynamicAoUniform::voxel_blur_radius`); it weighs by depth alone
+    // (`AoBlur::normal_sharpness`).
     let radius = i32(settings.voxel_blur_radius);
+    let normal_sharpness = 0.0;
 #else
     let radius = i32(settings.blur_radius);
+    let normal_sharpness = settings.blur_normal_sharpness;
 #endif
+    var n0 = vec3<f32>(0.0);
+    if normal_sharpness > 0.0 {
+        n0 = decode_normal(textureLoad(normal, pixel, 0).xyz);
+    }
     let sigma = (f32(radius) + 1.0) * 0.5;
     let falloff = 1.0 / (2.0 * sigma * sigma);
     var sum = vec2<f32>(0.0);
@@ -63,7 +74,11 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
             continue;
         }
         let dz = (depth_ahead(d) - z0) / z0 * settings.blur_sharpness;
-        let w = exp(-f32(i * i) * falloff - dz * dz);
+        var bend = 0.0;
+        if normal_sharpness > 0.0 {
+            bend = (1.0 - dot(n0, decode_normal(textureLoad(normal, q, 0).xyz))) * normal_sharpness;
+        }
+        let w = exp(-f32(i * i) * falloff - dz * dz - bend * bend);
         sum += w * input_value(q);
         weights += w;
     }

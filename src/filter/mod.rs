@@ -19,7 +19,11 @@
 //! weighted by a Gaussian of its pixel distance and by exp(−(sharpness · Δz / z)²), where Δz is
 //! its view-depth difference from the centre pixel, so occlusion does not bleed across
 //! silhouettes. Sharpness 0 gives a plain Gaussian. Pixels that show no geometry take no part.
-//! `reference::filter` is the CPU twin.
+//! The image-space occlusion's blur also weighs each tap by exp(−(normal_sharpness · (1 −
+//! n·n₀))²), the angle between its front-layer normal and the centre's: across a crease, a panel
+//! line or a thin part the depth hardly changes, and the depth weight alone smeared their
+//! occlusion over the surfaces beside them (`AoBlur::normal_sharpness`; BENCHMARKS.md, "The
+//! blur weighs by normals"). `reference::filter` is the CPU twin.
 //!
 //! On a view without far-field terms the last of these passes (the blur's Y pass, or the
 //! upsampling where the blur is off) writes the visibility Bevy's PBR reads itself, where compose

@@ -15,7 +15,7 @@ use bevy::shader::{Shader, ShaderDefVal};
 use bevy::utils::default;
 
 use crate::compose::bevy_ssao_format;
-use crate::view::{DynamicAoUniform, OCCLUSION_FORMAT, OCCLUSION_PAIR_FORMAT};
+use crate::view::{BLUR_NORMAL_FORMAT, DynamicAoUniform, OCCLUSION_FORMAT, OCCLUSION_PAIR_FORMAT};
 
 /// The blur and upsampling pipelines for one kind of occlusion buffer.
 pub(crate) struct FilterPipelines {
@@ -57,8 +57,9 @@ pub(crate) struct BlurPipelines {
 }
 
 /// The bind group layouts of the blur, of the upsampling and of the guided upsampling, writing
-/// `format`.
-fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 3] {
+/// `format`; with `normals`, the upsampling also writes the normals the blur weighs by
+/// ([`BLUR_NORMAL_FORMAT`]).
+fn layouts(format: TextureFormat, suffix: &str, normals: bool) -> [BindGroupLayoutDescriptor; 3] {
     let blur = BindGroupLayoutDescriptor::new(
         format!("dynamic_ao_blur{suffix}_layout"),
         &BindGroupLayoutEntries::sequential(
@@ -68,25 +69,30 @@ fn layouts(format: TextureFormat, suffix: &str) -> [BindGroupLayoutDescriptor; 3
                 uniform_buffer::<DynamicAoUniform>(true),
                 texture_depth_2d(),
                 texture_2d(TextureSampleType::Float { filterable: false }),
+                texture_2d(TextureSampleType::Float { filterable: false }),
                 texture_storage_2d(format, StorageTextureAccess::WriteOnly),
             ),
         ),
     );
     let upsample = |label: String, low: TextureSampleType| {
-        BindGroupLayoutDescriptor::new(
-            label,
-            &BindGroupLayoutEntries::sequential(
-                ShaderStages::COMPUTE,
-                (
-                    uniform_buffer::<ViewUniform>(true),
-                    uniform_buffer::<DynamicAoUniform>(true),
-                    texture_depth_2d(),
-                    texture_2d(TextureSampleType::Float { filterable: false }),
-                    texture_2d(low),
-                    texture_storage_2d(format, StorageTextureAccess::WriteOnly),
-                ),
+        let mut entries = DynamicBindGroupLayoutEntries::sequential(
+            ShaderStages::COMPUTE,
+            (
+                uniform_buffer::<ViewUniform>(true),
+                uniform_buffer::<DynamicAoUniform>(true),
+                texture_depth_2d(),
+                texture_2d(TextureSampleType::Float { filterable: false }),
+                texture_2d(low),
+                texture_storage_2d(format, StorageTextureAccess::WriteOnly),
             ),
-        )
+        );
+        if normals {
+            entries = entries.extend_sequential((texture_storage_2d(
+                BLUR_NORMAL_FORMAT,
+                StorageTextureAccess::WriteOnly,
+            ),));
+        }
+        BindGroupLayoutDescriptor::new(label, &entries)
     };
     [
         blur,
@@ -132,10 +138,9 @@ impl Variant {
     ) -> CachedComputePipelineId {
         let mut shader_defs = self.shader_defs.clone();
         shader_defs.extend(extra.map(ShaderDefVal::from));
-        // Where `output` sits in the layout (`shaders/filter_output.wgsl`): after the blur's four
-        // bindings, after the upsampling's five.
-        let output_binding = if entry == "upsample" { 5 } else { 4 };
-        shader_defs.push(ShaderDefVal::UInt("OUTPUT_BINDING".into(), output_binding));
+        // Where `output` sits in the layout (`shaders/filter_output.wgsl`): after the five
+        // bindings the blur and the upsampling each read.
+        shader_defs.push(ShaderDefVal::UInt("OUTPUT_BINDING".into(), 5));
         let extra = extra.map_or(String::new(), |def| format!("_{}", def.to_lowercase()));
         world
             .resource::<PipelineCache>()
@@ -171,11 +176,14 @@ fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
     } else {
         Variant {
             format: OCCLUSION_FORMAT,
-            shader_defs: Vec::new(),
+            shader_defs: vec!["WRITE_NORMALS".into()],
             suffix: "",
         }
     };
-    let [layout, upsample_layout, guided_layout] = layouts(variant.format, variant.suffix);
+    // The image-space upsampling writes the normals its blur weighs by; the voxel term's blur
+    // weighs by depth alone.
+    let [layout, upsample_layout, guided_layout] =
+        layouts(variant.format, variant.suffix, !two_channels);
     let blur = load_embedded_asset!(world, "blur.wgsl");
     let upsample = load_embedded_asset!(world, "upsample.wgsl");
     FilterPipelines {
@@ -215,7 +223,8 @@ impl VisibilityPipelines {
             shader_defs,
             suffix: "_visibility",
         };
-        let [layout, upsample_layout, guided_layout] = layouts(format, variant.suffix);
+        // The upsampling writes visibility only where no blur follows.
+        let [layout, upsample_layout, guided_layout] = layouts(format, variant.suffix, false);
         let blur = load_embedded_asset!(world, "blur.wgsl");
         let upsample = load_embedded_asset!(world, "upsample.wgsl");
         Self {

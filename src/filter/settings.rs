@@ -6,10 +6,13 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 pub const DEFAULT_BLUR_RADIUS: u32 = 4;
 /// Default depth sharpness of the cross-bilateral blur (no unit).
 pub const DEFAULT_BLUR_SHARPNESS: f32 = 16.0;
+/// Default normal sharpness of the cross-bilateral blur (no unit).
+pub const DEFAULT_BLUR_NORMAL_SHARPNESS: f32 = 16.0;
 
 /// Separable cross-bilateral blur of the occlusion buffer, X then Y (Bavoil & Sainz 2008,
 /// "Cross Bilateral Filter"): a Gaussian in image space whose weights fall with the difference in
-/// view depth, so occlusion does not bleed across silhouettes.
+/// view depth, so occlusion does not bleed across silhouettes, and with the angle between the
+/// front layer's normals, so it does not bleed across creases, panel lines and thin parts either.
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
 pub struct AoBlur {
@@ -21,6 +24,13 @@ pub struct AoBlur {
     /// pixel's depth: weight × exp(−(sharpness · Δz / z)²). 0 is a plain Gaussian. No unit.
     /// Valid: ≥ 0. Default: [`DEFAULT_BLUR_SHARPNESS`].
     pub sharpness: f32,
+    /// How fast a sample's weight falls with the angle between its normal and the centre
+    /// pixel's (the front layer's, normal maps included): weight × exp(−(normal_sharpness ·
+    /// (1 − cos θ))²). At 16 a sample at 20° keeps 38% of its weight and one at 45° none to
+    /// speak of; 0 weighs by depth alone, as Bavoil & Sainz do. The image-space occlusion's blur
+    /// only: the voxel term's weighs by depth alone (its error is the grid's steps, which run
+    /// across surfaces). No unit. Valid: ≥ 0. Default: [`DEFAULT_BLUR_NORMAL_SHARPNESS`].
+    pub normal_sharpness: f32,
 }
 
 impl Default for AoBlur {
@@ -28,6 +38,7 @@ impl Default for AoBlur {
         Self {
             radius: DEFAULT_BLUR_RADIUS,
             sharpness: DEFAULT_BLUR_SHARPNESS,
+            normal_sharpness: DEFAULT_BLUR_NORMAL_SHARPNESS,
         }
     }
 }
@@ -40,17 +51,22 @@ impl AoBlur {
     pub const OFF: AoBlur = AoBlur {
         radius: 0,
         sharpness: DEFAULT_BLUR_SHARPNESS,
+        normal_sharpness: DEFAULT_BLUR_NORMAL_SHARPNESS,
     };
 
     /// The same blur clamped into its valid ranges (a bad sharpness becomes the default).
     pub fn sanitized(&self) -> Self {
+        let valid = |value: f32, default| {
+            if value.is_finite() && value >= 0.0 {
+                value
+            } else {
+                default
+            }
+        };
         Self {
             radius: self.radius.min(Self::MAX_RADIUS),
-            sharpness: if self.sharpness.is_finite() && self.sharpness >= 0.0 {
-                self.sharpness
-            } else {
-                DEFAULT_BLUR_SHARPNESS
-            },
+            sharpness: valid(self.sharpness, DEFAULT_BLUR_SHARPNESS),
+            normal_sharpness: valid(self.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS),
         }
     }
 }

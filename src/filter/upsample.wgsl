@@ -11,7 +11,9 @@
 // as compose would have (`DynamicAoView::filter_is_last`). With GUIDE_TEXELS it reads the temporal
 // pass's history of this frame, whose texels carry their linear depth and normal beside the
 // occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
-// 8-bit). `reference::filter` is the CPU twin.
+// 8-bit). With WRITE_NORMALS it also copies each pixel's front-layer normal, as read, into
+// `blur_normals`, which the blur weighs by (`DynamicAoTextures::blur_normal`).
+// `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth}
@@ -32,9 +34,17 @@
 @group(0) @binding(4) var low: texture_2d<f32>;
 #endif
 // Binding 5 is `output` (`shaders/filter_output.wgsl`).
+#ifdef WRITE_NORMALS
+@group(0) @binding(6) var blur_normals: texture_storage_2d<rgba16float, write>;
+#endif
 
-fn store(x: vec2<i32>, value: vec2<f32>) {
+// Writes pixel `x`'s upsampled `value`, and with WRITE_NORMALS its front-layer normal as
+// `normal_texture` encodes it.
+fn store(x: vec2<i32>, value: vec2<f32>, encoded_normal: vec3<f32>) {
     store_filtered(settings, x, value, textureDimensions(depth_texture));
+#ifdef WRITE_NORMALS
+    textureStore(blur_normals, x, vec4<f32>(encoded_normal, 0.0));
+#endif
 }
 
 #ifndef GUIDE_TEXELS
@@ -96,16 +106,26 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel
         return;
     }
     if depth <= 0.0 {
-        store(x, vec2<f32>(0.0));
+        store(x, vec2<f32>(0.0), vec3<f32>(0.0));
         return;
     }
     let p = pixel_position(x, dims, depth);
-    let n = decode_normal(textureLoad(normal_texture, x, 0).xyz);
-    blend_at(x, p, n, a, b, c, d);
+    let encoded = textureLoad(normal_texture, x, 0).xyz;
+    blend_at(x, p, decode_normal(encoded), encoded, a, b, c, d);
 }
 
-// `blend` once the pixel's surface is known.
-fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, a: Texel, b: Texel, c: Texel, d: Texel) {
+// `blend` once the pixel's surface is known: position `p`, unit normal `n`, and that normal as
+// `normal_texture` encodes it.
+fn blend_at(
+    x: vec2<i32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    encoded: vec3<f32>,
+    a: Texel,
+    b: Texel,
+    c: Texel,
+    d: Texel,
+) {
     let h_x = a.value.x + a.value.y;
     let w = vec4<f32>(
         weight(a, x, p, n, h_x),
@@ -115,7 +135,7 @@ fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, a: Texel, b: Texel, c: Tex
     );
     let sum = w.x * a.value + w.y * b.value + w.z * c.value + w.w * d.value;
     let weights = w.x + w.y + w.z + w.w;
-    store(x, select(a.value, sum / weights, weights > 0.0));
+    store(x, select(a.value, sum / weights, weights > 0.0), encoded);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -139,9 +159,15 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let pp = texel(l + vec2<i32>(1, 1), low_dims);
     // An even coordinate is bracketed towards −1, an odd one towards +1 (texel l sits on 2l).
     if oo.guide.on_surface {
-        blend_at(x, oo.guide.p, oo.guide.n, oo, mo, om, mm);
+#ifdef WRITE_NORMALS
+        // The guide's own normal may be the history's 8-bit one; the blur gets the layer's.
+        let encoded = textureLoad(normal_texture, x, 0).xyz;
+#else
+        let encoded = vec3<f32>(0.0);
+#endif
+        blend_at(x, oo.guide.p, oo.guide.n, encoded, oo, mo, om, mm);
     } else {
-        store(x, vec2<f32>(0.0));
+        store(x, vec2<f32>(0.0), vec3<f32>(0.0));
     }
     let x1 = x + vec2<i32>(1, 0);
     blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), oo, po, om, pm);

@@ -15,7 +15,8 @@ use bevy::utils::default;
 
 use crate::settings::AoTechnique;
 use crate::view::{
-    DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT, ViewBindings,
+    BLUR_NORMAL_FORMAT, DynamicAoTextures, DynamicAoUniform, DynamicAoView, OCCLUSION_FORMAT,
+    ViewBindings,
 };
 
 /// One compute pipeline per image-space technique, over one layout.
@@ -54,6 +55,7 @@ impl FromWorld for ImageSpacePipelines {
                     texture_depth_2d(),
                     float(),
                     texture_storage_2d(OCCLUSION_FORMAT, StorageTextureAccess::WriteOnly),
+                    texture_storage_2d(BLUR_NORMAL_FORMAT, StorageTextureAccess::WriteOnly),
                 ),
             ),
         );
@@ -120,6 +122,7 @@ pub(super) fn prepare_image_space_bind_groups(
                     .as_ref()
                     .unwrap_or(&textures.near_occlusion)
                     .default_view,
+                &textures.blur_normal.default_view,
             )),
         );
         commands

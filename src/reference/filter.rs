@@ -3,6 +3,7 @@
 use bevy::math::Vec4;
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
+use crate::filter::settings::AoBlur;
 
 /// Distance in front of the camera for a reverse-Z depth (metres).
 pub fn linear_depth(view: &ViewMatrices, depth: f32) -> f32 {
@@ -96,29 +97,29 @@ pub fn joint_bilateral_upsample_pair(
 }
 
 /// Blurs `occlusion` (row-major, the size of `nd`) along X then Y with the front layer's depth
-/// as the edge guide: the separable cross-bilateral filter of Bavoil & Sainz 2008.
+/// and normals as the edge guide: the separable cross-bilateral filter of Bavoil & Sainz 2008,
+/// with `blur`'s normal weight (`normal_sharpness` 0: depth alone, as the voxel term's blur).
 pub fn cross_bilateral_blur(
     occlusion: &[f32],
     nd: &NdBuffer,
     view: &ViewMatrices,
-    radius: u32,
-    sharpness: f32,
+    blur: &AoBlur,
 ) -> Vec<f32> {
-    if radius == 0 {
+    if blur.radius == 0 {
         return occlusion.to_vec();
     }
-    let along_x = blur_pass(occlusion, nd, view, radius, sharpness, (1, 0));
-    blur_pass(&along_x, nd, view, radius, sharpness, (0, 1))
+    let along_x = blur_pass(occlusion, nd, view, blur, (1, 0));
+    blur_pass(&along_x, nd, view, blur, (0, 1))
 }
 
 fn blur_pass(
     input: &[f32],
     nd: &NdBuffer,
     view: &ViewMatrices,
-    radius: u32,
-    sharpness: f32,
+    blur: &AoBlur,
     step: (i32, i32),
 ) -> Vec<f32> {
+    let (radius, sharpness) = (blur.radius, blur.sharpness);
     let (w, h) = (nd.width as i32, nd.height as i32);
     let depths: Vec<f32> = nd.front.iter().map(|t| t.depth).collect();
     let linear: Vec<f32> = depths
@@ -136,6 +137,7 @@ fn blur_pass(
                 continue;
             }
             let z0 = linear[center];
+            let n0 = nd.front[center].normal;
             let (mut sum, mut weights) = (0.0f32, 0.0f32);
             for i in -radius..=radius {
                 let (qx, qy) = (x + step.0 * i, y + step.1 * i);
@@ -147,7 +149,8 @@ fn blur_pass(
                     continue;
                 }
                 let dz = (linear[q] - z0) / z0 * sharpness;
-                let weight = (-((i * i) as f32) * falloff - dz * dz).exp();
+                let bend = (1.0 - n0.dot(nd.front[q].normal)) * blur.normal_sharpness;
+                let weight = (-((i * i) as f32) * falloff - dz * dz - bend * bend).exp();
                 sum += weight * input[q];
                 weights += weight;
             }
@@ -202,8 +205,13 @@ mod tests {
     #[test]
     fn bilateral_blur_keeps_each_side_of_a_depth_edge() {
         let (occlusion, nd, view) = step_edge();
-        let sharp = cross_bilateral_blur(&occlusion, &nd, &view, 8, 16.0);
-        let plain = cross_bilateral_blur(&occlusion, &nd, &view, 8, 0.0);
+        let blur = |sharpness| AoBlur {
+            radius: 8,
+            sharpness,
+            normal_sharpness: 0.0,
+        };
+        let sharp = cross_bilateral_blur(&occlusion, &nd, &view, &blur(16.0));
+        let plain = cross_bilateral_blur(&occlusion, &nd, &view, &blur(0.0));
         // First far pixel and last near pixel of a row.
         let (far, near) = (16usize, 15usize);
         assert!(sharp[far] < 0.01, "bled onto the far side: {}", sharp[far]);
@@ -221,6 +229,41 @@ mod tests {
         );
         // Away from the edge, a constant stays constant.
         assert!((sharp[0] - 0.8).abs() < 1e-6 && sharp[31].abs() < 1e-6);
+    }
+
+    /// A crease: one depth across the image, the normal turning 90° at its middle, dark on the
+    /// left. The normal weight keeps each side; depth alone cannot see the crease.
+    #[test]
+    fn bilateral_blur_keeps_each_side_of_a_crease() {
+        let (_, mut nd, view) = step_edge();
+        let w = nd.width as usize;
+        let depth = nd.front[0].depth;
+        for (i, texel) in nd.front.iter_mut().enumerate() {
+            texel.depth = depth;
+            texel.normal = if i % w < w / 2 { Vec3::Z } else { Vec3::X };
+        }
+        let occlusion: Vec<f32> = (0..nd.front.len())
+            .map(|i| if i % w < w / 2 { 0.8 } else { 0.0 })
+            .collect();
+        let blur = |normal_sharpness| AoBlur {
+            radius: 8,
+            normal_sharpness,
+            ..AoBlur::default()
+        };
+        let kept = cross_bilateral_blur(&occlusion, &nd, &view, &blur(16.0));
+        let bled = cross_bilateral_blur(&occlusion, &nd, &view, &blur(0.0));
+        let (dark, open) = (w / 2 - 1, w / 2);
+        assert!(
+            (kept[dark] - 0.8).abs() < 1e-3 && kept[open] < 1e-3,
+            "the normal weight let occlusion cross the crease: {} {}",
+            kept[dark],
+            kept[open]
+        );
+        assert!(
+            bled[open] > 0.2,
+            "without it the crease is crossed: {}",
+            bled[open]
+        );
     }
 
     #[test]
@@ -243,7 +286,7 @@ mod tests {
     fn radius_zero_is_identity() {
         let (occlusion, nd, view) = step_edge();
         assert_eq!(
-            cross_bilateral_blur(&occlusion, &nd, &view, 0, 16.0),
+            cross_bilateral_blur(&occlusion, &nd, &view, &AoBlur::OFF),
             occlusion
         );
     }

@@ -117,6 +117,10 @@ fn every_documented_default_is_the_real_one() {
         ("DEFAULT_MIN_SAMPLES", &DEFAULT_MIN_SAMPLES),
         ("DEFAULT_BLUR_RADIUS", &DEFAULT_BLUR_RADIUS),
         ("DEFAULT_BLUR_SHARPNESS", &DEFAULT_BLUR_SHARPNESS),
+        (
+            "DEFAULT_BLUR_NORMAL_SHARPNESS",
+            &DEFAULT_BLUR_NORMAL_SHARPNESS,
+        ),
         ("NearFieldParams::default", &near_field),
         ("HorizonParams::default", &horizon),
         ("RayMarchParams::default", &ray_march),

@@ -8,7 +8,9 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 // Each technique's settings live in its folder; they are named here too, beside the component
 // that holds them.
 pub use crate::fields::settings::FieldShading;
-pub use crate::filter::settings::{AoBlur, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS};
+pub use crate::filter::settings::{
+    AoBlur, DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS,
+};
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};
 pub use crate::ray_march::settings::RayMarchParams;

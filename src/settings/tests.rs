@@ -78,10 +78,12 @@ fn bad_values_fall_back() {
     let blur = AoBlur {
         radius: 99,
         sharpness: f32::NAN,
+        normal_sharpness: -1.0,
     }
     .sanitized();
     assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
     assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
+    assert_eq!(blur.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS);
 }
 
 #[test]

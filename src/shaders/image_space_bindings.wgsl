@@ -1,6 +1,7 @@
 // The bindings every image-space technique reads (`image_space/pipeline.rs` builds the layout): the view,
-// the per-view settings, both ND-buffer layers and the occlusion buffer the technique writes; and
-// the receiver start-up and the view-space reconstruction they share.
+// the per-view settings, both ND-buffer layers, the occlusion buffer the technique writes and the
+// copy of the front layer's normals it writes for the blur at full resolution; and the receiver
+// start-up and the view-space reconstruction they share.
 
 #define_import_path bevy_dynamic_ao::image_space_bindings
 
@@ -15,6 +16,9 @@
 @group(0) @binding(4) var back_depth: texture_depth_2d;
 @group(0) @binding(5) var back_normal: texture_2d<f32>;
 @group(0) @binding(6) var occlusion: texture_storage_2d<r32float, write>;
+// The blur's copy of the front layer's normals (`DynamicAoTextures::blur_normal`), encoded as the
+// layer encodes them. At half resolution the upsampling writes it.
+@group(0) @binding(7) var blur_normals: texture_storage_2d<rgba16float, write>;
 
 // View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
 fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
@@ -60,7 +64,11 @@ fn receiver(invocation: vec3<u32>) -> Receiver {
         return r;
     }
     r.depth = textureLoad(front_depth, r.pixel, 0);
-    r.normal = decode_normal(textureLoad(front_normal, r.pixel, 0).xyz);
+    let encoded = textureLoad(front_normal, r.pixel, 0).xyz;
+    if settings.resolution_scale == 1u {
+        textureStore(blur_normals, r.pixel, vec4<f32>(encoded, 0.0));
+    }
+    r.normal = decode_normal(encoded);
     if r.depth <= 0.0 || dot(r.normal, r.normal) == 0.0 {
         textureStore(occlusion, r.out_pixel, vec4<f32>(0.0));
         return r;

@@ -14,9 +14,10 @@ struct DynamicAoUniform {
     near_field_back_layer: u32,
     // 1 when an image-space technique (near field, horizon or ray march) is on.
     image_space: u32,
-    // Cross-bilateral blur: half-width in pixels (0 = off) and depth sharpness (no unit).
+    // Cross-bilateral blur: half-width in pixels (0 = off), depth and normal sharpness (no unit).
     blur_radius: u32,
     blur_sharpness: f32,
+    blur_normal_sharpness: f32,
     // Horizon-based AO: directions, steps per direction, angle bias (radians), W0, contrast.
     horizon_directions: u32,
     horizon_steps: u32,

@@ -41,6 +41,10 @@ pub(crate) const NORMAL_FORMAT: TextureFormat = TextureFormat::Rgb10a2Unorm;
 pub(crate) const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
 /// Format of the intermediate occlusion buffers (always usable as a storage texture).
 pub(crate) const OCCLUSION_FORMAT: TextureFormat = TextureFormat::R32Float;
+/// Format of the normals the upsampling writes for the blur: the front layer's, encoded as Bevy's
+/// prepass encodes them (`n * 0.5 + 0.5`), in a format every adapter can write from a compute
+/// pass.
+pub(crate) const BLUR_NORMAL_FORMAT: TextureFormat = TextureFormat::Rgba16Float;
 /// Format of two-channel occlusion buffers (the voxel term's: the near field's share and the
 /// rest, see `FarFieldBlend`).
 pub(crate) const OCCLUSION_PAIR_FORMAT: TextureFormat = TextureFormat::Rg32Float;
@@ -225,6 +229,13 @@ pub(crate) struct DynamicAoTextures {
     pub full_occlusion: CachedTexture,
     /// Between the two passes of the blur.
     pub blur_scratch: CachedTexture,
+    /// The front layer's normals as the blur weighs by them ([`BLUR_NORMAL_FORMAT`]), copied by
+    /// the pass that reads them anyway: the upsampling at half resolution, the image-space
+    /// technique at full resolution. On lavapipe the blur's passes, given the prepass's normal
+    /// texture itself, were charged 12–15 ms more at 640×480 by the GPU timestamps around them,
+    /// whatever they read; given this copy, nothing measurable (BENCHMARKS.md, "The blur weighs
+    /// by normals").
+    pub blur_normal: CachedTexture,
 }
 
 /// The size of a view's image in pixels, `None` while it has none.
@@ -347,6 +358,7 @@ fn prepare_view_textures(
         } else {
             near_occlusion.clone()
         };
+        let blur_normal = texture("dynamic_ao_blur_normal", size, BLUR_NORMAL_FORMAT, storage);
         commands.entity(entity).insert(DynamicAoTextures {
             back_depth: texture("dynamic_ao_back_depth", size, DEPTH_FORMAT, attachment),
             back_normal: texture("dynamic_ao_back_normal", size, NORMAL_FORMAT, attachment),
@@ -354,6 +366,7 @@ fn prepare_view_textures(
             raw_occlusion,
             full_occlusion,
             blur_scratch: texture("dynamic_ao_blur_scratch", size, OCCLUSION_FORMAT, storage),
+            blur_normal,
         });
     }
 }

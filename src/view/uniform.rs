@@ -31,6 +31,8 @@ pub(crate) struct DynamicAoUniform {
     pub blur_radius: u32,
     /// Blur depth sharpness, no unit.
     pub blur_sharpness: f32,
+    /// Blur normal sharpness, no unit (see [`crate::AoBlur::normal_sharpness`]).
+    pub blur_normal_sharpness: f32,
     /// Horizon-based AO parameters (see [`crate::HorizonParams`]).
     pub horizon_directions: u32,
     pub horizon_steps: u32,
@@ -183,6 +185,7 @@ pub(super) fn extract_views(
                 image_space: u32::from(image_space),
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,
+                blur_normal_sharpness: blur.normal_sharpness,
                 horizon_directions: horizon.directions,
                 horizon_steps: horizon.steps,
                 horizon_angle_bias: horizon.angle_bias,

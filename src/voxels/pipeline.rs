@@ -200,6 +200,8 @@ pub(crate) fn prepare_voxel_bind_groups(
             view: view_binding.clone(),
             settings: settings_binding.clone(),
             depth,
+            // The voxel blur weighs by depth alone: any float texture stands in for the normals.
+            normal: &voxel_textures.low.default_view,
         };
         let upsample = blur.two.upsample_bind_group(
             &render_device,

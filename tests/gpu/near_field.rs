@@ -57,13 +57,7 @@ fn gpu_matches_the_cpu_formula_on_the_same_nd_buffer() {
         let frame = gpu.frame(4);
         // The formula, then the blur, as the GPU runs them.
         let occlusion = near_field_occlusion(&frame.nd, &frame.view, &inputs(&ao));
-        let blurred = cross_bilateral_blur(
-            &occlusion,
-            &frame.nd,
-            &frame.view,
-            ao.blur.radius,
-            ao.blur.sharpness,
-        );
+        let blurred = cross_bilateral_blur(&occlusion, &frame.nd, &frame.view, &ao.blur);
         let cpu: Vec<f32> = blurred.into_iter().map(|o| 1.0 - o).collect();
         let mask = frame.geometry_mask();
         let covered = mask.iter().filter(|m| **m).count();

@@ -115,6 +115,14 @@ fn bad_input_gives_a_one_line_error() {
         (
             [
                 base(&["--scene", scene]),
+                vec!["--blur-normal-sharpness".into(), "-1".into()],
+            ]
+            .concat(),
+            "--blur-normal-sharpness takes a number",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
                 vec!["--technique".into(), "magic".into()],
             ]
             .concat(),

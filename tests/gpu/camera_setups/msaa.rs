@@ -168,15 +168,16 @@ fn msaa_matches_a_plain_capture_on_every_scene() {
                     "{name}: against ground truth {msaa_truth} vs {plain_truth}"
                 ));
             }
-            // Measured 0–0.0018 on boxes, walls, balls, the Cornell box's 4 cm walls and skinned
+            // Measured 0–0.0026 on boxes, walls, balls, the Cornell box's 4 cm walls and skinned
             // and morphed models on a floor at both radii: the centre sample gives the pixels the
-            // surfaces a single-sampled prepass shows. 0.0054 (0.75 m) and 0.0077 (2 m) on
+            // surfaces a single-sampled prepass shows. 0.0122 (0.75 m) and 0.0115 (2 m) on
             // DamagedHelmet, whose normal-mapped triangles are smaller than a pixel here: where
-            // no sample lies on the centre's triangle, the normal comes from a neighbour's.
+            // no sample lies on the centre's triangle, the normal comes from a neighbour's, and
+            // the blur weighs its taps by that normal (0.0054 and 0.0077 with depth alone).
             let bound = if scene.name == "DamagedHelmet on floor" {
-                0.009
+                0.0135
             } else {
-                0.0025
+                0.003
             };
             if error > bound {
                 failed.push(format!("{name}: MSAA against plain RMSE {error}"));

@@ -33,12 +33,12 @@ fn cpu_voxel_visibility(
     let low = voxel_ao_map(&frame.nd, &frame.view, &volumes, &camera);
     let full = joint_bilateral_upsample_pair(&low, &frame.nd, &frame.view, ao.effective_radius());
     let rest: Vec<f32> = full.iter().map(|[_, rest]| *rest).collect();
-    let blur = ao.blur.sanitized();
-    let filtered = if blur.radius > 0 {
-        cross_bilateral_blur(&rest, &frame.nd, &frame.view, blur.radius, blur.sharpness)
-    } else {
-        rest
+    // The voxel term's blur weighs by depth alone.
+    let blur = AoBlur {
+        normal_sharpness: 0.0,
+        ..ao.blur.sanitized()
     };
+    let filtered = cross_bilateral_blur(&rest, &frame.nd, &frame.view, &blur);
     filtered.iter().map(|o| 1.0 - o.clamp(0.0, 1.0)).collect()
 }
 
