@@ -108,11 +108,13 @@ fn layouts(format: TextureFormat, suffix: &str, normals: bool) -> [BindGroupLayo
 }
 
 /// What a set of filter pipelines writes: its output format, the shader definitions that select
-/// it, and the suffix of its labels.
+/// it, the suffix of its labels, and whether its upsampling also writes the normals the blur
+/// weighs by (`WRITE_NORMALS`, a binding more in its layouts).
 struct Variant {
     format: TextureFormat,
     shader_defs: Vec<ShaderDefVal>,
     suffix: &'static str,
+    writes_normals: bool,
 }
 
 impl Variant {
@@ -138,6 +140,9 @@ impl Variant {
     ) -> CachedComputePipelineId {
         let mut shader_defs = self.shader_defs.clone();
         shader_defs.extend(extra.map(ShaderDefVal::from));
+        if entry == "upsample" && self.writes_normals {
+            shader_defs.push("WRITE_NORMALS".into());
+        }
         // Where `output` sits in the layout (`shaders/filter_output.wgsl`): after the five
         // bindings the blur and the upsampling each read.
         shader_defs.push(ShaderDefVal::UInt("OUTPUT_BINDING".into(), 5));
@@ -168,22 +173,23 @@ impl Variant {
 
 fn filter_pipelines(world: &mut World, two_channels: bool) -> FilterPipelines {
     let variant = if two_channels {
+        // The voxel term's blur weighs by depth alone.
         Variant {
             format: OCCLUSION_PAIR_FORMAT,
             shader_defs: vec!["TWO_CHANNELS".into()],
             suffix: "_pair",
+            writes_normals: false,
         }
     } else {
         Variant {
             format: OCCLUSION_FORMAT,
-            shader_defs: vec!["WRITE_NORMALS".into()],
+            shader_defs: Vec::new(),
             suffix: "",
+            writes_normals: true,
         }
     };
-    // The image-space upsampling writes the normals its blur weighs by; the voxel term's blur
-    // weighs by depth alone.
     let [layout, upsample_layout, guided_layout] =
-        layouts(variant.format, variant.suffix, !two_channels);
+        layouts(variant.format, variant.suffix, variant.writes_normals);
     let blur = load_embedded_asset!(world, "blur.wgsl");
     let upsample = load_embedded_asset!(world, "upsample.wgsl");
     FilterPipelines {
@@ -218,13 +224,15 @@ impl VisibilityPipelines {
         if format == TextureFormat::R16Float {
             shader_defs.push("VISIBILITY_R16FLOAT".into());
         }
+        // The upsampling writes visibility only where no blur follows, which needs no normals.
         let variant = Variant {
             format,
             shader_defs,
             suffix: "_visibility",
+            writes_normals: false,
         };
-        // The upsampling writes visibility only where no blur follows.
-        let [layout, upsample_layout, guided_layout] = layouts(format, variant.suffix, false);
+        let [layout, upsample_layout, guided_layout] =
+            layouts(format, variant.suffix, variant.writes_normals);
         let blur = load_embedded_asset!(world, "blur.wgsl");
         let upsample = load_embedded_asset!(world, "upsample.wgsl");
         Self {
