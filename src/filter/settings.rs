@@ -26,7 +26,7 @@ pub struct AoBlur {
     pub sharpness: f32,
     /// How fast a sample's weight falls with the angle between its normal and the centre
     /// pixel's (the front layer's, normal maps included): weight × exp(−(normal_sharpness ·
-    /// (1 − cos θ))²). At 16 a sample at 20° keeps 38% of its weight and one at 45° none to
+    /// (1 − cos θ))²). At 16 a sample at 20° keeps 39% of its weight and one at 45° none to
     /// speak of; 0 weighs by depth alone, as Bavoil & Sainz do. The image-space occlusion's blur
     /// only: the voxel term's weighs by depth alone (its error is the grid's steps, which run
     /// across surfaces). No unit. Valid: ≥ 0. Default: [`DEFAULT_BLUR_NORMAL_SHARPNESS`].
