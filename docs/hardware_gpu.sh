@@ -29,10 +29,6 @@ bench=${BENCH_BIN:-$(cargo bench --profile dev --bench gpu_passes --no-run 2>&1 
     sed -n 's/.*Executable .*(\(.*\))/\1/p')}
 tests=${TESTS_BIN:-$(cargo test --test gpu --no-run 2>&1 |
     sed -n 's/.*Executable .*(\(.*\))/\1/p')}
-capture=${CAPTURE_BIN:-}
-if [ -z "$capture" ] && cargo build --example ao_capture >/dev/null 2>&1; then
-    capture=${CARGO_TARGET_DIR:-target}/debug/examples/ao_capture
-fi
 [ -x "$bench" ] && [ -x "$tests" ] || { echo "the build failed" >&2; exit 1; }
 
 if [ "${BENCH:-1}" != 0 ]; then
@@ -43,6 +39,10 @@ if [ "${BENCH:-1}" != 0 ]; then
         --only "AO fields,voxels,near field,near + fields,near + voxels,near + spheres" \
         >"$out/far.txt" 2>"$out/logs/far.log"
     echo "far field: exit $? ($out/far.txt)"
+    capture=${CAPTURE_BIN:-}
+    if [ -z "$capture" ] && cargo build --example ao_capture >/dev/null 2>&1; then
+        capture=${CARGO_TARGET_DIR:-target}/debug/examples/ao_capture
+    fi
     if [ -x "$capture" ]; then
         # Bevy's SSAO and the default alternate, twice, so a GPU still raising its clocks shows.
         for round in 1 2; do for scene in toasters cube_on_plane; do
