@@ -1,7 +1,8 @@
 //! The soak benchmark's run (`benches/soak`), 1,000 frames as CI runs it: occluders of every kind
 //! spawning and despawning, the target resized, presets, techniques and MSAA toggled, `DynamicAo`
 //! taken off and put back. Memory must stay bounded. It runs in a process of its own, in one
-//! allocator arena, so neither the tests before it nor the machine's load move its RSS.
+//! allocator arena and without the Vulkan validation layer, so neither the tests before it, the
+//! machine's load nor a debugging layer installed on it move its RSS.
 
 #[path = "../../benches/soak/run.rs"]
 mod run;
