@@ -59,10 +59,12 @@ pub const ONE_ARENA: (&str, &str) = ("MALLOC_ARENA_MAX", "1");
 /// what this crate and the driver keep, not a debugging layer's bookkeeping.
 pub const NO_VALIDATION_LAYER: (&str, &str) = ("WGPU_VALIDATION", "0");
 
-/// Whether this process runs in [`ONE_ARENA`]; if not, the caller runs itself again in it
-/// ([`again_in_one_arena`]).
+/// Whether this process runs in [`ONE_ARENA`] and without the validation layer
+/// ([`NO_VALIDATION_LAYER`]); if not, the caller runs itself again so ([`again_in_one_arena`]).
 pub fn in_one_arena() -> bool {
-    std::env::var_os(ONE_ARENA.0).is_some()
+    [ONE_ARENA, NO_VALIDATION_LAYER]
+        .iter()
+        .all(|(name, value)| std::env::var_os(name).is_some_and(|set| set == *value))
 }
 
 /// This executable with `args`, in [`ONE_ARENA`] and without the validation layer
