@@ -1,8 +1,9 @@
 //! Soak: 10,000 frames at 64×48 while occluders spawn and despawn, the view resizes, settings
 //! and MSAA toggle and `DynamicAo` comes and goes (see `run.rs` for the schedule). Prints process
 //! RSS and the plugin's GPU bytes at checkpoints as a Markdown table, then the RSS growth from the
-//! warm checkpoint (a fifth of the way) to the end and the largest GPU bytes seen, and exits with
-//! code 1 when either passes its bound. It runs itself again with glibc's allocator limited to one
+//! warm checkpoint (frame 2,000, a fifth of the way) to the end and the largest GPU bytes seen,
+//! and exits with code 1 when either passes its bound (code 2 for a run too short to reach the
+//! warm checkpoint). It runs itself again with glibc's allocator limited to one
 //! arena (`run::ONE_ARENA` says why).
 //!
 //! `cargo bench --profile dev --bench soak` (`-- --frames N` for another length,
@@ -35,6 +36,16 @@ fn main() {
             // `cargo bench` passes `--bench`.
             _ => {}
         }
+    }
+    // Growth is measured from the warm checkpoint (`Report::warm`) on: a shorter run would
+    // print a growth of nothing, whatever its memory did.
+    let warm = run::CYCLE + run::CYCLE / 4;
+    if frames <= warm {
+        eprintln!(
+            "soak: --frames {frames} ends before the warm checkpoint at frame {warm}, from which growth \
+             is measured; give more frames"
+        );
+        std::process::exit(2);
     }
     let start = std::time::Instant::now();
     let report = run::soak(frames, 20, spheres, run::CYCLE);
