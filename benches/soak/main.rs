@@ -3,8 +3,8 @@
 //! RSS and the plugin's GPU bytes at checkpoints as a Markdown table, then the RSS growth from the
 //! warm checkpoint (frame 2,000, a fifth of the way) to the end and the largest GPU bytes seen,
 //! and exits with code 1 when either passes its bound (code 2 for a run too short to reach the
-//! warm checkpoint). It runs itself again with glibc's allocator limited to one
-//! arena (`run::ONE_ARENA` says why).
+//! warm checkpoint). It runs itself again with glibc's allocator limited to one arena and without
+//! the Vulkan validation layer (`run::ONE_ARENA` and `run::NO_VALIDATION_LAYER` say why).
 //!
 //! `cargo bench --profile dev --bench soak` (`-- --frames N` for another length,
 //! `-- --without-spheres` to keep the sphere term off). CI runs 1,000 frames as the GPU test
@@ -15,10 +15,10 @@ mod common;
 mod run;
 
 fn main() {
-    if !run::in_one_arena() {
-        let status = run::again_in_one_arena(std::env::args_os().skip(1))
+    if !run::is_measured() {
+        let status = run::again_measured(std::env::args_os().skip(1))
             .status()
-            .expect("the soak runs itself again with one allocator arena");
+            .expect("the soak runs itself again in the environment it measures in");
         std::process::exit(status.code().unwrap_or(1));
     }
     let mut frames = 10_000;
@@ -37,9 +37,9 @@ fn main() {
             _ => {}
         }
     }
-    // Growth is measured from the warm checkpoint (`Report::warm`) on: a shorter run would
-    // print a growth of nothing, whatever its memory did.
-    let warm = run::CYCLE + run::CYCLE / 4;
+    // A run that ends before the warm checkpoint would print a growth of nothing, whatever its
+    // memory did.
+    let warm = run::warm_frame(run::CYCLE);
     if frames <= warm {
         eprintln!(
             "soak: --frames {frames} ends before the warm checkpoint at frame {warm}, from which growth \

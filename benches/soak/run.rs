@@ -59,27 +59,33 @@ pub const ONE_ARENA: (&str, &str) = ("MALLOC_ARENA_MAX", "1");
 /// what this crate and the driver keep, not a debugging layer's bookkeeping.
 pub const NO_VALIDATION_LAYER: (&str, &str) = ("WGPU_VALIDATION", "0");
 
-/// Whether this process runs in [`ONE_ARENA`] and without the validation layer
-/// ([`NO_VALIDATION_LAYER`]); if not, the caller runs itself again so ([`again_in_one_arena`]).
-pub fn in_one_arena() -> bool {
-    [ONE_ARENA, NO_VALIDATION_LAYER]
+/// The environment a run is measured in: [`ONE_ARENA`] and [`NO_VALIDATION_LAYER`].
+const MEASURED: [(&str, &str); 2] = [ONE_ARENA, NO_VALIDATION_LAYER];
+
+/// Whether this process runs in the environment a run is measured in; if not, the caller runs
+/// itself again in it ([`again_measured`]).
+pub fn is_measured() -> bool {
+    MEASURED
         .iter()
         .all(|(name, value)| std::env::var_os(name).is_some_and(|set| set == *value))
 }
 
-/// This executable with `args`, in [`ONE_ARENA`] and without the validation layer
-/// ([`NO_VALIDATION_LAYER`]).
-pub fn again_in_one_arena<I, S>(args: I) -> std::process::Command
+/// This executable with `args`, in the environment a run is measured in ([`ONE_ARENA`],
+/// [`NO_VALIDATION_LAYER`]).
+pub fn again_measured<I, S>(args: I) -> std::process::Command
 where
     I: IntoIterator<Item = S>,
     S: AsRef<std::ffi::OsStr>,
 {
     let mut command = std::process::Command::new(std::env::current_exe().expect("own path"));
+    command.args(args).envs(MEASURED);
     command
-        .args(args)
-        .env(ONE_ARENA.0, ONE_ARENA.1)
-        .env(NO_VALIDATION_LAYER.0, NO_VALIDATION_LAYER.1);
-    command
+}
+
+/// The frame of the warm checkpoint of a schedule that repeats every `cycle` frames: a quarter
+/// cycle after the first whole one ([`Report::warm`] says why). Growth is measured from there.
+pub fn warm_frame(cycle: u32) -> u32 {
+    cycle + cycle / 4
 }
 
 /// Most the RSS may grow from the warm checkpoint to the end, bytes.
@@ -143,7 +149,7 @@ impl Report {
         *self
             .samples
             .iter()
-            .find(|s| s.frame >= self.cycle + self.cycle / 4)
+            .find(|s| s.frame >= warm_frame(self.cycle))
             .unwrap_or(&self.end())
     }
 

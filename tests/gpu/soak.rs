@@ -16,10 +16,11 @@ fn a_thousand_frames_of_changes_stay_bounded() {
     let _turn = GPU_TURN
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
-    if !run::in_one_arena() {
-        // Its own process, in one allocator arena (`run::ONE_ARENA` says why), this test alone.
+    if !run::is_measured() {
+        // Its own process, in one allocator arena and without the validation layer
+        // (`run::ONE_ARENA` and `run::NO_VALIDATION_LAYER` say why), this test alone.
         let name = "soak::a_thousand_frames_of_changes_stay_bounded";
-        let output = run::again_in_one_arena(["--exact", name, "--nocapture"])
+        let output = run::again_measured(["--exact", name, "--nocapture"])
             .output()
             .expect("the test runs itself again");
         let stdout = String::from_utf8_lossy(&output.stdout);
@@ -34,7 +35,7 @@ fn a_thousand_frames_of_changes_stay_bounded() {
         // A filter that matched nothing would also succeed.
         assert!(
             stdout.contains(&format!("test {name} ... ok")),
-            "the run in one arena did not run {name}"
+            "the measured run did not run {name}"
         );
         return;
     }
