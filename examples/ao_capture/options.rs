@@ -10,7 +10,7 @@ use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -91,6 +91,8 @@ pub struct Options {
     pub blur_sharpness: f32,
     /// Normal sharpness of the cross-bilateral blur (`AoBlur::normal_sharpness`, no unit).
     pub blur_normal_sharpness: f32,
+    /// Reach of the blur's fine-detail term (`AoBlur::detail_reach`), pixels (0 = off).
+    pub blur_detail: u32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
     /// Frames rendered after the scene is posed, before the capture (default: 4, or twice the
@@ -136,6 +138,7 @@ impl Options {
         let mut blur = AoBlur::default().radius;
         let mut blur_sharpness = AoBlur::default().sharpness;
         let mut blur_normal_sharpness = AoBlur::default().normal_sharpness;
+        let mut blur_detail = AoBlur::default().detail_reach;
         let mut half_resolution = false;
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
@@ -225,6 +228,15 @@ impl Options {
                         return Err("--blur-normal-sharpness takes a finite number".to_string());
                     }
                 }
+                "--blur-detail" => {
+                    blur_detail = parse_number("--blur-detail", &value()?, 0u32)?;
+                    if blur_detail > AoBlur::MAX_DETAIL_REACH {
+                        return Err(format!(
+                            "--blur-detail is at most {} pixels",
+                            AoBlur::MAX_DETAIL_REACH
+                        ));
+                    }
+                }
                 "--time" => {
                     let text = value()?;
                     time = text
@@ -307,6 +319,7 @@ impl Options {
             blur,
             blur_sharpness,
             blur_normal_sharpness,
+            blur_detail,
             half_resolution,
             frames: frames.unwrap_or_else(|| {
                 if temporal.unwrap_or(preset.temporal()).enabled {

@@ -116,6 +116,7 @@ fn scene_ready(
                 radius: options.blur,
                 sharpness: options.blur_sharpness,
                 normal_sharpness: options.blur_normal_sharpness,
+                detail_reach: options.blur_detail,
             },
             half_resolution: options.half_resolution
                 || (options.default_technique && options.preset.half_resolution()),

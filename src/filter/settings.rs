@@ -8,6 +8,9 @@ pub const DEFAULT_BLUR_RADIUS: u32 = 4;
 pub const DEFAULT_BLUR_SHARPNESS: f32 = 16.0;
 /// Default normal sharpness of the cross-bilateral blur (no unit).
 pub const DEFAULT_BLUR_NORMAL_SHARPNESS: f32 = 16.0;
+/// Default reach of the fine-detail term the blur multiplies into the ray march's occlusion,
+/// pixels.
+pub const DEFAULT_BLUR_DETAIL_REACH: u32 = 6;
 
 /// Separable cross-bilateral blur of the occlusion buffer, X then Y (Bavoil & Sainz 2008,
 /// "Cross Bilateral Filter"): a Gaussian in image space whose weights fall with the difference in
@@ -31,6 +34,17 @@ pub struct AoBlur {
     /// only: the voxel term's weighs by depth alone (its error is the grid's steps, which run
     /// across surfaces). No unit. Valid: ≥ 0. Default: [`DEFAULT_BLUR_NORMAL_SHARPNESS`].
     pub normal_sharpness: f32,
+    /// Reach of the fine-detail term, pixels: after blurring the ray march's occlusion, the
+    /// blur's last pass multiplies in the occlusion of the surfaces within this many pixels
+    /// along the pixel's row and column, read from the front layer at full resolution (the
+    /// highest of them on each side, as a horizon, cosine-weighted, falling to nothing at the
+    /// reach or at R). Grooves, panel lines and creases narrower than the ray march's steps are
+    /// what the rays step over and what the blur does not keep; this term restores them
+    /// (BENCHMARKS.md, "The blur restores fine detail"). It applies to the ray march only (the
+    /// other techniques sample the front layer near the pixel themselves) and only where the
+    /// blur runs (`radius` above 0). 0 turns it off. Units: pixels. Valid: 0 ..=
+    /// [`AoBlur::MAX_DETAIL_REACH`]. Default: [`DEFAULT_BLUR_DETAIL_REACH`].
+    pub detail_reach: u32,
 }
 
 impl Default for AoBlur {
@@ -39,6 +53,7 @@ impl Default for AoBlur {
             radius: DEFAULT_BLUR_RADIUS,
             sharpness: DEFAULT_BLUR_SHARPNESS,
             normal_sharpness: DEFAULT_BLUR_NORMAL_SHARPNESS,
+            detail_reach: DEFAULT_BLUR_DETAIL_REACH,
         }
     }
 }
@@ -46,12 +61,15 @@ impl Default for AoBlur {
 impl AoBlur {
     /// Largest radius the blur accepts.
     pub const MAX_RADIUS: u32 = 16;
+    /// Largest reach of the fine-detail term the blur accepts, pixels.
+    pub const MAX_DETAIL_REACH: u32 = 16;
 
     /// No blur.
     pub const OFF: AoBlur = AoBlur {
         radius: 0,
         sharpness: DEFAULT_BLUR_SHARPNESS,
         normal_sharpness: DEFAULT_BLUR_NORMAL_SHARPNESS,
+        detail_reach: DEFAULT_BLUR_DETAIL_REACH,
     };
 
     /// The same blur clamped into its valid ranges (a bad sharpness becomes the default).
@@ -67,6 +85,7 @@ impl AoBlur {
             radius: self.radius.min(Self::MAX_RADIUS),
             sharpness: valid(self.sharpness, DEFAULT_BLUR_SHARPNESS),
             normal_sharpness: valid(self.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS),
+            detail_reach: self.detail_reach.min(Self::MAX_DETAIL_REACH),
         }
     }
 }

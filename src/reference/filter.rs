@@ -1,6 +1,6 @@
 //! The cross-bilateral blur on the CPU, step for step as `filter/blur.wgsl` computes it.
 
-use bevy::math::Vec4;
+use bevy::math::{IVec2, Vec4};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::filter::settings::AoBlur;
@@ -160,6 +160,60 @@ fn blur_pass(
     out
 }
 
+/// The blur's fine-detail term ([`AoBlur::detail_reach`], `fine_detail` in `filter/blur.wgsl`):
+/// for each receiver of the front layer, the occlusion of the surfaces within `reach` pixels along
+/// its row and column, each side's highest as a horizon (the sine of its elevation above the
+/// tangent plane, falling to nothing at the reach's world size or at `radius`, metres), the
+/// squares of the four sides' sines averaged. 0 on the background.
+pub fn fine_detail(nd: &NdBuffer, view: &ViewMatrices, reach: u32, radius: f32) -> Vec<f32> {
+    let reach_pixels = reach as i32;
+    nd.per_receiver(view, |r| {
+        let p = r.view_position;
+        let footprint = view.pixel_world_size(-p.z, nd.height);
+        let reach_world = ((reach as f32 + 0.5) * footprint).min(radius);
+        let mut occlusion = 0.0;
+        for side in [IVec2::X, IVec2::NEG_X, IVec2::Y, IVec2::NEG_Y] {
+            let mut highest = 0.0f32;
+            for k in 1..=reach_pixels {
+                let q = r.pixel + side * k;
+                let Some(texel) = nd.texel(false, q.x, q.y) else {
+                    break;
+                };
+                if texel.depth <= 0.0 {
+                    continue;
+                }
+                let v = view.view_position(q.x, q.y, nd.width, nd.height, texel.depth) - p;
+                let distance = v.length();
+                if distance <= 0.0 || distance >= reach_world {
+                    continue;
+                }
+                let t = distance / reach_world;
+                highest = highest.max(v.dot(r.view_normal) / distance * (1.0 - t * t));
+            }
+            occlusion += highest * highest;
+        }
+        occlusion * 0.25
+    })
+}
+
+/// `occlusion` (row-major, the size of `nd`) with the fine-detail term of `reach` pixels
+/// multiplied in, as the blur's Y pass does for the ray march: 1 − (1 − occlusion)(1 − min(
+/// intensity · detail, 1)).
+pub fn with_fine_detail(
+    occlusion: &[f32],
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    reach: u32,
+    radius: f32,
+    intensity: f32,
+) -> Vec<f32> {
+    occlusion
+        .iter()
+        .zip(fine_detail(nd, view, reach, radius))
+        .map(|(o, d)| 1.0 - (1.0 - o) * (1.0 - (intensity * d).min(1.0)))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,6 +263,7 @@ mod tests {
             radius: 8,
             sharpness,
             normal_sharpness: 0.0,
+            detail_reach: 0,
         };
         let sharp = cross_bilateral_blur(&occlusion, &nd, &view, &blur(16.0));
         let plain = cross_bilateral_blur(&occlusion, &nd, &view, &blur(0.0));
@@ -289,5 +344,34 @@ mod tests {
             cross_bilateral_blur(&occlusion, &nd, &view, &AoBlur::OFF),
             occlusion
         );
+    }
+
+    #[test]
+    fn fine_detail_sees_only_what_rises_above_the_tangent_plane() {
+        // A step 3 cm deep instead of 3 m, so the near half lies within the term's reach.
+        let (_, mut nd, view) = step_edge();
+        let (w, h) = (nd.width, nd.height);
+        for i in 0..(w * h) as usize {
+            let x = i as u32 % w;
+            nd.front[i].depth = 0.1 / if x < w / 2 { 1.0 } else { 1.03 };
+        }
+        let detail = fine_detail(&nd, &view, 6, 10.0);
+        let at = |x: u32| detail[(h / 2 * w + x) as usize];
+        // Flat, facing the camera: every neighbour lies in the tangent plane.
+        assert_eq!(at(2), 0.0);
+        assert_eq!(at(w - 3), 0.0);
+        // The near side of the step sees the far side below its tangent plane.
+        assert_eq!(at(w / 2 - 1), 0.0);
+        // Beside the step, on the far side, the near side rises above it: one side of four.
+        let first = at(w / 2);
+        assert!(first > 0.005 && first < 0.25, "{first}");
+        // Further off, the step is lower in the sky and then out of reach.
+        assert!(at(w / 2 + 2) < first);
+        assert_eq!(at(w / 2 + 7), 0.0);
+        // Within R only: a reach cut to 1 cm leaves nothing.
+        assert!(fine_detail(&nd, &view, 6, 0.01).iter().all(|d| *d == 0.0));
+        let darker = with_fine_detail(&vec![0.5; detail.len()], &nd, &view, 6, 10.0, 1.0);
+        let i = (h / 2 * w + w / 2) as usize;
+        assert!((darker[i] - (1.0 - 0.5 * (1.0 - first))).abs() < 1e-6);
     }
 }

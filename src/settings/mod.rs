@@ -9,7 +9,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 // that holds them.
 pub use crate::fields::settings::FieldShading;
 pub use crate::filter::settings::{
-    AoBlur, DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS,
+    AoBlur, DEFAULT_BLUR_DETAIL_REACH, DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS,
+    DEFAULT_BLUR_SHARPNESS,
 };
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};

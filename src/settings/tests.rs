@@ -79,9 +79,11 @@ fn bad_values_fall_back() {
         radius: 99,
         sharpness: f32::NAN,
         normal_sharpness: -1.0,
+        detail_reach: 99,
     }
     .sanitized();
     assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
+    assert_eq!(blur.detail_reach, AoBlur::MAX_DETAIL_REACH);
     assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
     assert_eq!(blur.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS);
 }

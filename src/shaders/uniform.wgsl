@@ -18,6 +18,8 @@ struct DynamicAoUniform {
     blur_radius: u32,
     blur_sharpness: f32,
     blur_normal_sharpness: f32,
+    // Reach of the fine-detail term the blur's Y pass multiplies in, pixels (0 = off).
+    blur_detail_reach: u32,
     // Horizon-based AO: directions, steps per direction, angle bias (radians), W0, contrast.
     horizon_directions: u32,
     horizon_steps: u32,

@@ -33,6 +33,9 @@ pub(crate) struct DynamicAoUniform {
     pub blur_sharpness: f32,
     /// Blur normal sharpness, no unit (see [`crate::AoBlur::normal_sharpness`]).
     pub blur_normal_sharpness: f32,
+    /// Reach of the blur's fine-detail term, pixels; 0 where it does not apply (see
+    /// [`crate::AoBlur::detail_reach`]).
+    pub blur_detail_reach: u32,
     /// Horizon-based AO parameters (see [`crate::HorizonParams`]).
     pub horizon_directions: u32,
     pub horizon_steps: u32,
@@ -186,6 +189,11 @@ pub(super) fn extract_views(
                 blur_radius: blur.radius,
                 blur_sharpness: blur.sharpness,
                 blur_normal_sharpness: blur.normal_sharpness,
+                blur_detail_reach: if ao.technique == AoTechnique::RayMarch {
+                    blur.detail_reach
+                } else {
+                    0
+                },
                 horizon_directions: horizon.directions,
                 horizon_steps: horizon.steps,
                 horizon_angle_bias: horizon.angle_bias,

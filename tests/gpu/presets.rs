@@ -160,10 +160,11 @@ fn the_default_keeps_detail_on_third_party_models() {
             scene.name,
             error / bevy
         );
-        // Measured: 0.12–0.39 × Bevy's RMSE; high-frequency error 0.014–0.038 against Bevy's
-        // 0.032–0.044.
+        // Measured: 0.11–0.31 × Bevy's RMSE (DamagedHelmet 0.31×, 0.39× before the blur's
+        // fine-detail term); high-frequency error 0.013–0.029 against Bevy's 0.032–0.044. The
+        // bound is the README's: a third of Bevy's.
         assert!(
-            error <= 0.42 * bevy,
+            error <= 0.33 * bevy,
             "{}: RMSE {error:.4} against Bevy's {bevy:.4}",
             scene.name
         );
