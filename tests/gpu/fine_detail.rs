@@ -311,12 +311,22 @@ fn a_close_up_of_a_finely_detailed_model() {
 /// default's ray march with accumulation off (one fixed pattern of rays, the same in both
 /// frames), rendered without the term and with it, must differ by the CPU's term multiplied in,
 /// on the procedural scenes and the ring on a floor (creases where walls, balls and the ring meet
-/// the floor).
+/// the floor), at the default reach and at the largest.
 #[test]
 fn the_blurs_fine_detail_term_matches_the_cpu() {
-    let mut scenes = crate::scenes::all().to_vec();
-    scenes.push(("ring on floor", far_scenes::ring_on_floor().spec));
-    for (name, scene) in scenes {
+    let reach = AoBlur::default().detail_reach;
+    let mut scenes: Vec<_> = crate::scenes::all()
+        .into_iter()
+        .map(|(name, scene)| (name, scene, reach))
+        .collect();
+    scenes.push(("ring on floor", far_scenes::ring_on_floor().spec, reach));
+    // The largest reach fills the whole of the blur's tile of rows and columns.
+    scenes.push((
+        "room corner, the largest reach",
+        crate::scenes::room_corner(),
+        AoBlur::MAX_DETAIL_REACH,
+    ));
+    for (name, scene, reach) in scenes {
         let without = DynamicAo {
             temporal: AoTemporal::OFF,
             blur: AoBlur {
@@ -328,9 +338,8 @@ fn the_blurs_fine_detail_term_matches_the_cpu() {
         .with_radius(BEVY_SSAO_RADIUS);
         let mut gpu = crate::harness::Gpu::new(&scene, without.clone());
         let off = gpu.frame(4);
-        gpu.set_ao(|ao| ao.blur.detail_reach = AoBlur::default().detail_reach);
+        gpu.set_ao(|ao| ao.blur.detail_reach = reach);
         let on = gpu.frame(4);
-        let reach = AoBlur::default().detail_reach;
         let detail = fine_detail(&on.nd, &on.view, reach, BEVY_SSAO_RADIUS);
         let cpu: Vec<f32> = off
             .visibility
