@@ -33,7 +33,9 @@
 //!    [`radius`](DynamicAo::radius); the papers' own weightings are options.
 //! 4. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
 //!    cross depth edges (Bavoil & Sainz 2008), nor creases and panel lines, where the normal
-//!    turns ([`AoBlur::normal_sharpness`]).
+//!    turns ([`AoBlur::normal_sharpness`]), and multiplies into the ray march's occlusion a
+//!    fine-detail term read from the full-resolution front layer, for the grooves its steps
+//!    step over ([`AoBlur::detail_reach`]).
 //! 5. [`compose`] joins near- and far-field occlusion, counting each occluder once
 //!    ([`FarFieldBlend`]), turns it into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
@@ -103,7 +105,7 @@
 //! | | §3.4 border rescale, interior fill | `fields/baker/paper.rs` |
 //! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
 //! | | ray-marched AO | `ray_march/march.wgsl` |
-//! | | cross-bilateral blur | `filter/blur.wgsl` (its weight on normals is not in the paper) |
+//! | | cross-bilateral blur | `filter/blur.wgsl` (its weight on normals, and the fine-detail term, are not in the paper) |
 //! | Reinbothe et al. 2009 | §5 voxelization | `voxels/voxelize.wgsl` |
 //! | | §6 eq. 2–3, rays through the grid, Wendland's kernel | `voxels/voxel_ao.wgsl`, `shaders/math.wgsl` |
 //! | | §7 eq. 5–7, joint bilateral upsampling | `shaders/joint_upsample.wgsl` (window and weights), `filter/upsample.wgsl`, `compose/compose.wgsl` (half-resolution splats) |
