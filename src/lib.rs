@@ -31,11 +31,14 @@
 //!    all include occluders that are off-screen or hidden. Every term measures what a ray tracer
 //!    measures: the share of the cosine-weighted hemisphere blocked within the camera's
 //!    [`radius`](DynamicAo::radius); the papers' own weightings are options.
-//! 4. [`filter`] smooths the occlusion with a separable cross-bilateral blur that does not
-//!    cross depth edges (Bavoil & Sainz 2008), nor creases and panel lines, where the normal
-//!    turns ([`AoBlur::normal_sharpness`]), and multiplies into the ray march's occlusion a
-//!    fine-detail term read from the full-resolution front layer, for the grooves its steps
-//!    step over ([`AoBlur::detail_reach`]).
+//! 4. [`filter`] brings half-resolution occlusion back to full resolution with a joint bilateral
+//!    upsampling, and without temporal accumulation smooths it with a separable cross-bilateral
+//!    blur that does not cross depth edges (Bavoil & Sainz 2008), nor creases and panel lines,
+//!    where the normal turns ([`AoBlur::normal_sharpness`]); under accumulation the history
+//!    averages the noise instead ([`AoBlur::accumulated_radius`]). A fine-detail term read from
+//!    the full-resolution front layer, for the grooves the ray march's steps step over
+//!    ([`AoBlur::detail_reach`]), joins the ray march's occlusion: in the ray march itself, a
+//!    side a frame, under accumulation, else in the blur's last pass.
 //! 5. [`compose`] joins near- and far-field occlusion, counting each occluder once
 //!    ([`FarFieldBlend`]), turns it into visibility and writes it into the texture Bevy's PBR
 //!    shader already reads for its own SSAO, so only ambient/indirect diffuse light and
@@ -182,6 +185,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/proxy_occlusion.wgsl");
         load_shader_library!(app, "shaders/joint_upsample.wgsl");
         load_shader_library!(app, "shaders/filter_output.wgsl");
+        load_shader_library!(app, "shaders/fine_detail.wgsl");
 
         app.register_type::<DynamicAo>()
             .register_type::<readback::AoReadback>()

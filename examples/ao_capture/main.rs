@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
+//!     [--accumulated-blur PIXELS] \
 //!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] \
 //!     [--far-blend count-once|add|max] \
 //!     [--voxel-falloff none|wendland] [--frames N] \

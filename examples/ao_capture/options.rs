@@ -10,7 +10,7 @@ use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -85,8 +85,11 @@ pub struct Options {
     pub voxel_falloff: VoxelFalloff,
     /// The level of every technique's sample budget.
     pub preset: AoPreset,
-    /// Half-width of the cross-bilateral blur, pixels (0 = off).
+    /// Half-width of the cross-bilateral blur without accumulation, pixels (0 = off).
     pub blur: u32,
+    /// Half-width of the cross-bilateral blur under accumulation (`AoBlur::accumulated_radius`),
+    /// pixels (0 = off).
+    pub accumulated_blur: u32,
     /// Depth sharpness of the cross-bilateral blur (`AoBlur::sharpness`, no unit).
     pub blur_sharpness: f32,
     /// Normal sharpness of the cross-bilateral blur (`AoBlur::normal_sharpness`, no unit).
@@ -136,6 +139,7 @@ impl Options {
             (None, None, None, None, None);
         let (mut preset, mut frames, mut time) = (AoPreset::default(), None, 0.0f32);
         let mut blur = AoBlur::default().radius;
+        let mut accumulated_blur = AoBlur::default().accumulated_radius;
         let mut blur_sharpness = AoBlur::default().sharpness;
         let mut blur_normal_sharpness = AoBlur::default().normal_sharpness;
         let mut blur_detail = AoBlur::default().detail_reach;
@@ -213,6 +217,15 @@ impl Options {
                     blur = parse_number("--blur", &value()?, 0u32)?;
                     if blur > AoBlur::MAX_RADIUS {
                         return Err(format!("--blur is at most {} pixels", AoBlur::MAX_RADIUS));
+                    }
+                }
+                "--accumulated-blur" => {
+                    accumulated_blur = parse_number("--accumulated-blur", &value()?, 0u32)?;
+                    if accumulated_blur > AoBlur::MAX_RADIUS {
+                        return Err(format!(
+                            "--accumulated-blur is at most {} pixels",
+                            AoBlur::MAX_RADIUS
+                        ));
                     }
                 }
                 "--blur-sharpness" => {
@@ -317,6 +330,7 @@ impl Options {
             voxel_falloff,
             preset,
             blur,
+            accumulated_blur,
             blur_sharpness,
             blur_normal_sharpness,
             blur_detail,

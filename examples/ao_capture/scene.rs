@@ -114,6 +114,7 @@ fn scene_ready(
             radius: options.radius,
             blur: AoBlur {
                 radius: options.blur,
+                accumulated_radius: options.accumulated_blur,
                 sharpness: options.blur_sharpness,
                 normal_sharpness: options.blur_normal_sharpness,
                 detail_reach: options.blur_detail,

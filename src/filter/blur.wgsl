@@ -3,14 +3,16 @@
 // weighted by its distance, its depth difference and, for one channel, the angle between its
 // normal and the centre's: the paper's depth weight alone carries occlusion across creases and
 // panel lines, where the depth hardly changes. The Y pass of one channel then multiplies in the
-// fine-detail term (`AoBlur::detail_reach`). With VISIBILITY the Y pass writes the texture
+// fine-detail term (`AoBlur::detail_reach`, all four sides; `blur_detail_reach` is 0 under
+// temporal accumulation, where the ray march adds it a side a frame). With VISIBILITY the Y pass writes the texture
 // Bevy's PBR reads, as compose would have (`DynamicAoView::filter_is_last`). `reference::filter`
 // is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::filter_output::store_filtered
-#import bevy_dynamic_ao::nd_buffer::{linear_depth, decode_normal, position_in_view, pixel_world_size}
+#import bevy_dynamic_ao::nd_buffer::{linear_depth, decode_normal}
+#import bevy_dynamic_ao::fine_detail::{fine_detail, with_fine_detail}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
@@ -35,49 +37,6 @@ fn input_value(q: vec2<i32>) -> vec2<f32> {
 // Distance in front of the camera for a reverse-Z depth, metres: the same at every pixel.
 fn depth_ahead(d: f32) -> f32 {
     return linear_depth(view, vec2<f32>(0.5), d);
-}
-
-// Occlusion of the surfaces within `settings.blur_detail_reach` pixels of `pixel` along its row
-// and column (`AoBlur::detail_reach`): on each of the four sides the highest of them as a horizon,
-// the sine of its elevation above the pixel's tangent plane, falling to nothing at the reach's
-// world size (or R); a cosine-weighted hemisphere bounded by that horizon is occluded by the
-// sine's square. The ray march's steps, a sixth of R apart, step over grooves and creases a
-// pixel or two wide; the front layer at full resolution holds them.
-fn fine_detail(pixel: vec2<i32>, dims: vec2<i32>, depth_here: f32) -> f32 {
-    let reach = i32(settings.blur_detail_reach);
-    let size = vec2<f32>(dims);
-    let world_normal = decode_normal(textureLoad(normal, pixel, 0).xyz);
-    if all(world_normal == vec3<f32>(0.0)) {
-        return 0.0;
-    }
-    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
-    let p = position_in_view(view, (vec2<f32>(pixel) + 0.5) / size, depth_here);
-    let footprint = pixel_world_size(view, -p.z, size.y);
-    let reach_world = min((f32(reach) + 0.5) * footprint, settings.image_space_radius);
-    let sides = array<vec2<i32>, 4>(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
-    var occlusion = 0.0;
-    for (var side = 0; side < 4; side++) {
-        var highest = 0.0;
-        for (var k = 1; k <= reach; k++) {
-            let q = pixel + sides[side] * k;
-            if any(q < vec2<i32>(0)) || any(q >= dims) {
-                break;
-            }
-            let d = textureLoad(depth, q, 0);
-            if d <= 0.0 {
-                continue;
-            }
-            let v = position_in_view(view, (vec2<f32>(q) + 0.5) / size, d) - p;
-            let distance = length(v);
-            if distance <= 0.0 || distance >= reach_world {
-                continue;
-            }
-            let t = distance / reach_world;
-            highest = max(highest, dot(v, n) / distance * (1.0 - t * t));
-        }
-        occlusion += highest * highest;
-    }
-    return occlusion * 0.25;
 }
 
 fn blur(pixel: vec2<i32>, step: vec2<i32>) {
@@ -129,8 +88,12 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
     var value = sum / weights;
 #ifndef TWO_CHANNELS
     if step.y == 1 && settings.blur_detail_reach > 0u {
-        let detail = min(settings.intensity * fine_detail(pixel, dims, center_depth), 1.0);
-        value.x = 1.0 - (1.0 - value.x) * (1.0 - detail);
+        if normal_sharpness <= 0.0 {
+            n0 = decode_normal(textureLoad(normal, pixel, 0).xyz);
+        }
+        let reach = i32(settings.blur_detail_reach);
+        let detail = fine_detail(view, depth, pixel, center_depth, n0, reach, settings.image_space_radius, 0, 4);
+        value.x = with_fine_detail(value.x, detail, settings.intensity);
     }
 #endif
     store(pixel, value);

@@ -25,13 +25,19 @@
 //! occlusion over the surfaces beside them (`AoBlur::normal_sharpness`; BENCHMARKS.md, "The
 //! blur weighs by normals"). `reference::filter` is the CPU twin.
 //!
-//! The blur's Y pass then multiplies into the ray march's occlusion a fine-detail term read from
-//! the front layer at full resolution (`AoBlur::detail_reach`): along the pixel's row and column,
+//! Under temporal accumulation the image-space blur does not run by default
+//! (`AoBlur::accumulated_radius`): the history averages the noise it removed, and its two
+//! full-resolution passes cost more than every other pass of the default (BENCHMARKS.md, "The
+//! default runs no blur").
+//!
+//! Without accumulation the blur's Y pass then multiplies into the ray march's occlusion a
+//! fine-detail term read from the front layer at full resolution (`AoBlur::detail_reach`; under
+//! accumulation the ray march adds it itself, a side a frame; `shaders/fine_detail.wgsl`): along the pixel's row and column,
 //! each side's highest surface within a few pixels as a horizon, occluding a cosine-weighted
 //! hemisphere by the square of its elevation's sine. It is not from the papers: the ray march's
 //! steps, a sixth of R apart, step over grooves and creases a pixel or two wide, which the front
-//! layer holds (BENCHMARKS.md, "The blur restores fine detail"). `reference::filter::fine_detail`
-//! is the CPU twin.
+//! layer holds (BENCHMARKS.md, "The blur restores fine detail").
+//! `reference::filter::fine_detail_sides` is the CPU twin.
 //!
 //! On a view without far-field terms the last of these passes (the blur's Y pass, or the
 //! upsampling where the blur is off) writes the visibility Bevy's PBR reads itself, where compose

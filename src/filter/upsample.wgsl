@@ -2,12 +2,13 @@
 // 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
 // window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
 // difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
-// The window is the 2 × 2 texels that bracket x (those bilinear interpolation would read)
-// rather than 3 × 3: less than half the loads and position reconstructions, for the pass that
-// cost more than the half-resolution AO it upsampled. One invocation upsamples the 2 × 2 pixels
-// of one texel, whose brackets lie within the 3 × 3 texels around it: each texel's depth,
-// normal, position and value are read once for the four (9 texels instead of 16), and the
-// quad's first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
+// One invocation upsamples the 2 × 2 pixels of one texel, reading the 3 × 3 texels around it
+// once for the four (their depth, normal, position and value), and each pixel blends all nine:
+// the screen-distance kernel's support (4 pixels) leaves out those too far. Nine texels instead
+// of the 2 × 2 that bracket the pixel cost no read more, and average the accumulated noise over
+// a wider footprint where the guides agree (converged high-frequency error 9–13% lower on flat
+// scenes, none higher on DamagedHelmet; BENCHMARKS.md, "The default runs no blur"). The quad's
+// first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
 // as compose would have (`DynamicAoView::filter_is_last`). With GUIDE_TEXELS it reads the temporal
 // pass's history of this frame, whose texels carry their linear depth and normal beside the
 // occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
@@ -99,9 +100,22 @@ fn weight(t: Texel, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
     return w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
 }
 
-// Pixel `x` at `depth` blended from its bracket: `a` holds it, `b` and `c` lie beside `a`
-// along x and along y, `d` diagonally.
-fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel, d: Texel) {
+// The 3 × 3 texels around one texel `oo`, named by their offsets (m = −1, o = 0, p = +1; x
+// first). No arrays: CPU rasterizers spill those to memory.
+struct Window {
+    mm: Texel,
+    om: Texel,
+    pm: Texel,
+    mo: Texel,
+    oo: Texel,
+    po: Texel,
+    mp: Texel,
+    op: Texel,
+    pp: Texel,
+}
+
+// Pixel `x` at `depth` blended from the window `w` of its quad's texel.
+fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, w: Window) {
     if any(x >= dims) {
         return;
     }
@@ -111,31 +125,29 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, a: Texel, b: Texel, c: Texel
     }
     let p = pixel_position(x, dims, depth);
     let encoded = textureLoad(normal_texture, x, 0).xyz;
-    blend_at(x, p, decode_normal(encoded), encoded, a, b, c, d);
+    blend_at(x, p, decode_normal(encoded), encoded, w);
+}
+
+// `sum` (the weighted channels, and the weights in z) with texel `t` added for pixel `x`.
+fn add(sum: vec3<f32>, t: Texel, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> vec3<f32> {
+    let w = weight(t, x, p, n, h_x);
+    return sum + vec3<f32>(w * t.value, w);
 }
 
 // `blend` once the pixel's surface is known: position `p`, unit normal `n`, and that normal as
-// `normal_texture` encodes it.
-fn blend_at(
-    x: vec2<i32>,
-    p: vec3<f32>,
-    n: vec3<f32>,
-    encoded: vec3<f32>,
-    a: Texel,
-    b: Texel,
-    c: Texel,
-    d: Texel,
-) {
-    let h_x = a.value.x + a.value.y;
-    let w = vec4<f32>(
-        weight(a, x, p, n, h_x),
-        weight(b, x, p, n, h_x),
-        weight(c, x, p, n, h_x),
-        weight(d, x, p, n, h_x),
-    );
-    let sum = w.x * a.value + w.y * b.value + w.z * c.value + w.w * d.value;
-    let weights = w.x + w.y + w.z + w.w;
-    store(x, select(a.value, sum / weights, weights > 0.0), encoded);
+// `normal_texture` encodes it. The AO-difference weight compares each texel with the quad's own.
+fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, encoded: vec3<f32>, w: Window) {
+    let h_x = w.oo.value.x + w.oo.value.y;
+    var sum = add(vec3<f32>(0.0), w.oo, x, p, n, h_x);
+    sum = add(sum, w.mm, x, p, n, h_x);
+    sum = add(sum, w.om, x, p, n, h_x);
+    sum = add(sum, w.pm, x, p, n, h_x);
+    sum = add(sum, w.mo, x, p, n, h_x);
+    sum = add(sum, w.po, x, p, n, h_x);
+    sum = add(sum, w.mp, x, p, n, h_x);
+    sum = add(sum, w.op, x, p, n, h_x);
+    sum = add(sum, w.pp, x, p, n, h_x);
+    store(x, select(w.oo.value, sum.xy / sum.z, sum.z > 0.0), encoded);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -147,32 +159,32 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(x >= dims) {
         return;
     }
-    // The 3 × 3 texels around l, named by their offsets (m = −1, o = 0, p = +1; x first).
-    let oo = texel(l, low_dims);
-    let mo = texel(l + vec2<i32>(-1, 0), low_dims);
-    let po = texel(l + vec2<i32>(1, 0), low_dims);
-    let om = texel(l + vec2<i32>(0, -1), low_dims);
-    let op = texel(l + vec2<i32>(0, 1), low_dims);
-    let mm = texel(l + vec2<i32>(-1, -1), low_dims);
-    let pm = texel(l + vec2<i32>(1, -1), low_dims);
-    let mp = texel(l + vec2<i32>(-1, 1), low_dims);
-    let pp = texel(l + vec2<i32>(1, 1), low_dims);
-    // An even coordinate is bracketed towards −1, an odd one towards +1 (texel l sits on 2l).
-    if oo.guide.on_surface {
+    let w = Window(
+        texel(l + vec2<i32>(-1, -1), low_dims),
+        texel(l + vec2<i32>(0, -1), low_dims),
+        texel(l + vec2<i32>(1, -1), low_dims),
+        texel(l + vec2<i32>(-1, 0), low_dims),
+        texel(l, low_dims),
+        texel(l + vec2<i32>(1, 0), low_dims),
+        texel(l + vec2<i32>(-1, 1), low_dims),
+        texel(l + vec2<i32>(0, 1), low_dims),
+        texel(l + vec2<i32>(1, 1), low_dims),
+    );
+    if w.oo.guide.on_surface {
 #ifdef WRITE_NORMALS
         // The guide's own normal may be the history's 8-bit one; the blur gets the layer's.
         let encoded = textureLoad(normal_texture, x, 0).xyz;
 #else
         let encoded = vec3<f32>(0.0);
 #endif
-        blend_at(x, oo.guide.p, oo.guide.n, encoded, oo, mo, om, mm);
+        blend_at(x, w.oo.guide.p, w.oo.guide.n, encoded, w);
     } else {
         store(x, vec2<f32>(0.0), vec3<f32>(0.0));
     }
     let x1 = x + vec2<i32>(1, 0);
-    blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), oo, po, om, pm);
+    blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), w);
     let x2 = x + vec2<i32>(0, 1);
-    blend(x2, dims, textureLoad(depth_texture, min(x2, dims - 1), 0), oo, mo, op, mp);
+    blend(x2, dims, textureLoad(depth_texture, min(x2, dims - 1), 0), w);
     let x3 = x + vec2<i32>(1, 1);
-    blend(x3, dims, textureLoad(depth_texture, min(x3, dims - 1), 0), oo, po, op, pp);
+    blend(x3, dims, textureLoad(depth_texture, min(x3, dims - 1), 0), w);
 }

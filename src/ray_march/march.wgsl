@@ -7,6 +7,7 @@
 #import bevy_dynamic_ao::nd_buffer::pixel_world_size
 #import bevy_dynamic_ao::sampling::{pixel_pattern, frame_jitter}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
+#import bevy_dynamic_ao::fine_detail::{fine_detail, with_fine_detail}
 
 // The two rows of `view.view_from_clip` that give a view-space depth: a step needs only the
 // depth of the surface it is compared with, two dot products instead of a whole unprojection.
@@ -143,6 +144,16 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
             }
         }
     }
-    let value = settings.intensity * f32(hits) / f32(directions * elevations);
+    var value = settings.intensity * f32(hits) / f32(directions * elevations);
+    // Under accumulation, the fine-detail term (`AoBlur::detail_reach`) of one side a frame:
+    // the term is the mean of its four sides' and joins the rays' occlusion as
+    // 1 − (1 − rays)(1 − term), linear in each, so the history's average over frames is the
+    // whole term's, for a quarter of its reads.
+    if settings.march_detail_reach > 0u {
+        let reach = i32(settings.march_detail_reach);
+        let side = i32(settings.frame_index & 3u);
+        let detail = fine_detail(view, front_depth, r.pixel, r.depth, r.normal, reach, radius, side, 1);
+        value = with_fine_detail(value, detail, settings.intensity);
+    }
     textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
 }

@@ -20,6 +20,19 @@ pub fn wendland(t: f32, h: f32) -> f32 {
     s * s * s * s * (4.0 * t / h + 1.0)
 }
 
+/// The texels `filter/upsample.wgsl` blends for a pixel, as offsets from the pixel's own texel.
+const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
+    (0, 0),
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
 /// Joint bilateral upsampling of `low` (row-major, `(width + 1) / 2` × `(height + 1) / 2`, texel
 /// (i, j) computed at full-resolution pixel (2i, 2j)) to the size of `nd`, as
 /// `filter/upsample.wgsl` does it. `radius` is the AO radius R (support of the world-distance
@@ -58,33 +71,30 @@ pub fn joint_bilateral_upsample_pair(
             let nearest = ((x / 2).min(lw - 1), (y / 2).min(lh - 1));
             let v_x = low[(nearest.1 * lw + nearest.0) as usize];
             let h_x = v_x[0] + v_x[1];
-            // The 2 × 2 texels that bracket the pixel: texel l was computed at pixel 2l.
-            let toward = |v: i32| if v & 1 == 1 { 1 } else { -1 };
+            // The 3 × 3 texels around the pixel's own (texel l was computed at pixel 2l), its
+            // own first, in the order the shader adds them.
             let (mut sum, mut weights) = ([0.0f32; 2], 0.0f32);
-            for j in 0..=1 {
-                for i in 0..=1 {
-                    let (lx, ly) = (nearest.0 + toward(x) * i, nearest.1 + toward(y) * j);
-                    let (qx, qy) = (lx * 2, ly * 2);
-                    if lx < 0 || ly < 0 || lx >= lw || ly >= lh || qx >= w || qy >= h {
-                        continue;
-                    }
-                    let q = nd.front[(qy * w + qx) as usize];
-                    if q.depth <= 0.0 {
-                        continue;
-                    }
-                    let v_y = low[(ly * lw + lx) as usize];
-                    let h_y = v_y[0] + v_y[1];
-                    let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
-                    let world =
-                        p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
-                    let weight = wendland(screen, 4.0)
-                        * wendland(1.0 - t.normal.dot(q.normal), 2.0)
-                        * wendland(world, radius)
-                        * wendland((h_x - h_y).abs(), 1.0);
-                    sum[0] += weight * v_y[0];
-                    sum[1] += weight * v_y[1];
-                    weights += weight;
+            for (i, j) in UPSAMPLE_WINDOW {
+                let (lx, ly) = (nearest.0 + i, nearest.1 + j);
+                let (qx, qy) = (lx * 2, ly * 2);
+                if lx < 0 || ly < 0 || lx >= lw || ly >= lh || qx >= w || qy >= h {
+                    continue;
                 }
+                let q = nd.front[(qy * w + qx) as usize];
+                if q.depth <= 0.0 {
+                    continue;
+                }
+                let v_y = low[(ly * lw + lx) as usize];
+                let h_y = v_y[0] + v_y[1];
+                let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
+                let world = p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
+                let weight = wendland(screen, 4.0)
+                    * wendland(1.0 - t.normal.dot(q.normal), 2.0)
+                    * wendland(world, radius)
+                    * wendland((h_x - h_y).abs(), 1.0);
+                sum[0] += weight * v_y[0];
+                sum[1] += weight * v_y[1];
+                weights += weight;
             }
             out[(y * w + x) as usize] = if weights > 0.0 {
                 [sum[0] / weights, sum[1] / weights]
@@ -160,19 +170,34 @@ fn blur_pass(
     out
 }
 
-/// The blur's fine-detail term ([`AoBlur::detail_reach`], `fine_detail` in `filter/blur.wgsl`):
-/// for each receiver of the front layer, the occlusion of the surfaces within `reach` pixels along
-/// its row and column, each side's highest as a horizon (the sine of its elevation above the
-/// tangent plane, falling to nothing at the reach's world size or at `radius`, metres), the
-/// squares of the four sides' sines averaged. 0 on the background.
+/// The fine-detail term's sides, in the order `shaders/fine_detail.wgsl` numbers them.
+pub const FINE_DETAIL_SIDES: [IVec2; 4] = [IVec2::X, IVec2::NEG_X, IVec2::Y, IVec2::NEG_Y];
+
+/// The fine-detail term ([`AoBlur::detail_reach`], `fine_detail` in `shaders/fine_detail.wgsl`)
+/// as the blur's Y pass adds it: [`fine_detail_sides`] over all four sides.
 pub fn fine_detail(nd: &NdBuffer, view: &ViewMatrices, reach: u32, radius: f32) -> Vec<f32> {
+    fine_detail_sides(nd, view, reach, radius, &FINE_DETAIL_SIDES)
+}
+
+/// The fine-detail term over `sides` (of [`FINE_DETAIL_SIDES`]; the ray march adds one a frame
+/// under accumulation): for each receiver of the front layer, the occlusion of the surfaces
+/// within `reach` pixels along each side, the highest as a horizon (the sine of its elevation
+/// above the tangent plane, falling to nothing at the reach's world size or at `radius`,
+/// metres), the squares of the sides' sines averaged. 0 on the background.
+pub fn fine_detail_sides(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    reach: u32,
+    radius: f32,
+    sides: &[IVec2],
+) -> Vec<f32> {
     let reach_pixels = reach as i32;
     nd.per_receiver(view, |r| {
         let p = r.view_position;
         let footprint = view.pixel_world_size(-p.z, nd.height);
         let reach_world = ((reach as f32 + 0.5) * footprint).min(radius);
         let mut occlusion = 0.0;
-        for side in [IVec2::X, IVec2::NEG_X, IVec2::Y, IVec2::NEG_Y] {
+        for &side in sides {
             let mut highest = 0.0f32;
             for k in 1..=reach_pixels {
                 let q = r.pixel + side * k;
@@ -192,7 +217,7 @@ pub fn fine_detail(nd: &NdBuffer, view: &ViewMatrices, reach: u32, radius: f32) 
             }
             occlusion += highest * highest;
         }
-        occlusion * 0.25
+        occlusion / sides.len() as f32
     })
 }
 
@@ -261,6 +286,7 @@ mod tests {
         let (occlusion, nd, view) = step_edge();
         let blur = |sharpness| AoBlur {
             radius: 8,
+            accumulated_radius: 0,
             sharpness,
             normal_sharpness: 0.0,
             detail_reach: 0,

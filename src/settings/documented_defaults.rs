@@ -116,6 +116,10 @@ fn every_documented_default_is_the_real_one() {
         ("DEFAULT_MAX_SAMPLES", &DEFAULT_MAX_SAMPLES),
         ("DEFAULT_MIN_SAMPLES", &DEFAULT_MIN_SAMPLES),
         ("DEFAULT_BLUR_RADIUS", &DEFAULT_BLUR_RADIUS),
+        (
+            "DEFAULT_ACCUMULATED_BLUR_RADIUS",
+            &DEFAULT_ACCUMULATED_BLUR_RADIUS,
+        ),
         ("DEFAULT_BLUR_SHARPNESS", &DEFAULT_BLUR_SHARPNESS),
         (
             "DEFAULT_BLUR_NORMAL_SHARPNESS",

@@ -9,8 +9,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 // that holds them.
 pub use crate::fields::settings::FieldShading;
 pub use crate::filter::settings::{
-    AoBlur, DEFAULT_BLUR_DETAIL_REACH, DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS,
-    DEFAULT_BLUR_SHARPNESS,
+    AoBlur, DEFAULT_ACCUMULATED_BLUR_RADIUS, DEFAULT_BLUR_DETAIL_REACH,
+    DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS,
 };
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};
@@ -83,7 +83,8 @@ pub struct DynamicAo {
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
-    /// al. 2009, eq. 5–7); the blur then runs at full resolution. The sphere and field splats
+    /// al. 2009, eq. 5–7, over the 3 × 3 texels around each pixel's own); the blur, where it
+    /// runs, then runs at full resolution. The sphere and field splats
     /// follow it (each texel evaluates one pixel of its 2 × 2; compose upsamples them over
     /// normals and positions). Default: `true` (as [`AoPreset::High`] has it).
     pub half_resolution: bool,

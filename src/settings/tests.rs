@@ -77,12 +77,14 @@ fn bad_values_fall_back() {
     assert_eq!((p.max_samples, p.min_samples), (1, 1));
     let blur = AoBlur {
         radius: 99,
+        accumulated_radius: 99,
         sharpness: f32::NAN,
         normal_sharpness: -1.0,
         detail_reach: 99,
     }
     .sanitized();
     assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
+    assert_eq!(blur.accumulated_radius, AoBlur::MAX_RADIUS);
     assert_eq!(blur.detail_reach, AoBlur::MAX_DETAIL_REACH);
     assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
     assert_eq!(blur.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS);

@@ -3,8 +3,8 @@
 // (those bilinear interpolation would read), each weighted by the Wendland kernel (eq. 3) over
 // screen distance, normal difference and world distance to the pixel it was computed at (texel l
 // at pixel 2l). Used by compose for the sphere and field splats (`bracket`), and by the filter's
-// upsampling of the image-space and voxel terms (`texel_guide` and `guide_weight`, which it
-// shares across a 2 × 2 quad of pixels and joins with an AO-difference weight).
+// upsampling of the image-space and voxel terms (`texel_guide` and `guide_weight`, over the 3 × 3
+// texels around a 2 × 2 quad of pixels' own, joined with an AO-difference weight).
 // `reference::filter` is the CPU twin.
 
 #define_import_path bevy_dynamic_ao::joint_upsample

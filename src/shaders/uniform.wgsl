@@ -18,8 +18,12 @@ struct DynamicAoUniform {
     blur_radius: u32,
     blur_sharpness: f32,
     blur_normal_sharpness: f32,
-    // Reach of the fine-detail term the blur's Y pass multiplies in, pixels (0 = off).
+    // Reach of the fine-detail term the blur's Y pass multiplies in, all four sides, without
+    // temporal accumulation, pixels (0 = off).
     blur_detail_reach: u32,
+    // Reach of the fine-detail term the ray march adds itself, a side a frame, under temporal
+    // accumulation, pixels (0 = off).
+    march_detail_reach: u32,
     // Horizon-based AO: directions, steps per direction, angle bias (radians), W0, contrast.
     horizon_directions: u32,
     horizon_steps: u32,
@@ -56,7 +60,7 @@ struct DynamicAoUniform {
     frame_index: u32,
     // Frames the temporal history averages (1 without accumulation).
     temporal_frames: f32,
-    // Blur half-width of the voxel term, pixels (0 = off): not halved under accumulation.
+    // Blur half-width of the voxel term, pixels (0 = off): the same under accumulation.
     voxel_blur_radius: u32,
     // Where the camera's viewport starts in its render target, pixels.
     viewport_origin: vec2<u32>,

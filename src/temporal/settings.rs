@@ -12,7 +12,9 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// skinned and morphed meshes reproject correctly). A history whose depth or normal does not
 /// match the pixel (a disocclusion) is dropped, and a history far from the mean of this frame's
 /// values around the pixel is clamped toward it (no ghost trails). With it on, the image-space
-/// blur's radius is halved (the voxel term's is not).
+/// blur takes [`AoBlur::accumulated_radius`](crate::AoBlur::accumulated_radius), by default
+/// none (the voxel term's keeps [`AoBlur::radius`](crate::AoBlur::radius)), and the ray march
+/// adds the fine-detail term itself, a side a frame.
 ///
 /// On by default: the default technique traces 2 rays per pixel and frame and relies on it to
 /// reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static

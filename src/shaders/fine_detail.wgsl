@@ -1,0 +1,68 @@
+// The fine-detail term (`AoBlur::detail_reach`), joined with the ray march's occlusion: by the
+// ray march itself under temporal accumulation (one side a frame), else by the blur's Y pass
+// (all four sides). `reference::filter::fine_detail_sides` is the CPU twin.
+
+#define_import_path bevy_dynamic_ao::fine_detail
+
+#import bevy_render::view::View
+#import bevy_dynamic_ao::nd_buffer::{position_in_view, pixel_world_size}
+
+// Occlusion of the surfaces within `reach` pixels of `pixel` along its row and column in
+// `depth` (the front layer at full resolution), over the `side_count` sides from `first_side`
+// (0 +x, 1 −x, 2 +y, 3 −y; the whole term is all four's): on each side the highest of them as
+// a horizon, the sine of its elevation above the tangent plane of the pixel (reverse-Z depth
+// `depth_here`, world-space unit normal `world_normal`), falling to nothing at the reach's world
+// size or at `radius` (metres); a cosine-weighted hemisphere bounded by that horizon is occluded
+// by the sine's square. The ray march's steps, a sixth of R apart, step over grooves and creases
+// a pixel or two wide; the front layer at full resolution holds them.
+fn fine_detail(
+    view: View,
+    depth: texture_depth_2d,
+    pixel: vec2<i32>,
+    depth_here: f32,
+    world_normal: vec3<f32>,
+    reach: i32,
+    radius: f32,
+    first_side: i32,
+    side_count: i32,
+) -> f32 {
+    if all(world_normal == vec3<f32>(0.0)) {
+        return 0.0;
+    }
+    let dims = vec2<i32>(textureDimensions(depth));
+    let size = vec2<f32>(dims);
+    let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    let p = position_in_view(view, (vec2<f32>(pixel) + 0.5) / size, depth_here);
+    let footprint = pixel_world_size(view, -p.z, size.y);
+    let reach_world = min((f32(reach) + 0.5) * footprint, radius);
+    let sides = array<vec2<i32>, 4>(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
+    var occlusion = 0.0;
+    for (var side = first_side; side < first_side + side_count; side++) {
+        var highest = 0.0;
+        for (var k = 1; k <= reach; k++) {
+            let q = pixel + sides[side] * k;
+            if any(q < vec2<i32>(0)) || any(q >= dims) {
+                break;
+            }
+            let d = textureLoad(depth, q, 0);
+            if d <= 0.0 {
+                continue;
+            }
+            let v = position_in_view(view, (vec2<f32>(q) + 0.5) / size, d) - p;
+            let distance = length(v);
+            if distance <= 0.0 || distance >= reach_world {
+                continue;
+            }
+            let t = distance / reach_world;
+            highest = max(highest, dot(v, n) / distance * (1.0 - t * t));
+        }
+        occlusion += highest * highest;
+    }
+    return occlusion / f32(side_count);
+}
+
+// `occlusion` with the fine-detail term `detail` (scaled by `intensity`) joined as an independent
+// occluder: 1 − (1 − occlusion)(1 − detail).
+fn with_fine_detail(occlusion: f32, detail: f32, intensity: f32) -> f32 {
+    return 1.0 - (1.0 - occlusion) * (1.0 - min(intensity * detail, 1.0));
+}
