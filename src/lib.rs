@@ -108,7 +108,7 @@
 //! | | §3.4 border rescale, interior fill | `fields/baker/paper.rs` |
 //! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
 //! | | ray-marched AO | `ray_march/march.wgsl` |
-//! | | cross-bilateral blur | `filter/blur.wgsl` (its weight on normals, and the fine-detail term, are not in the paper) |
+//! | | cross-bilateral blur | `filter/blur.wgsl` (its weight on normals is not in the paper, nor is the fine-detail term, `shaders/fine_detail.wgsl`) |
 //! | Reinbothe et al. 2009 | §5 voxelization | `voxels/voxelize.wgsl` |
 //! | | §6 eq. 2–3, rays through the grid, Wendland's kernel | `voxels/voxel_ao.wgsl`, `shaders/math.wgsl` |
 //! | | §7 eq. 5–7, joint bilateral upsampling | `shaders/joint_upsample.wgsl` (window and weights), `filter/upsample.wgsl`, `compose/compose.wgsl` (half-resolution splats) |
