@@ -4,9 +4,9 @@
 // normal and the centre's: the paper's depth weight alone carries occlusion across creases and
 // panel lines, where the depth hardly changes. The Y pass of one channel then multiplies in the
 // fine-detail term (`AoBlur::detail_reach`, all four sides; `blur_detail_reach` is 0 under
-// temporal accumulation, where the ray march adds it a side a frame). With VISIBILITY the Y pass writes the texture
-// Bevy's PBR reads, as compose would have (`DynamicAoView::filter_is_last`). `reference::filter`
-// is the CPU twin.
+// temporal accumulation, where the ray march adds it a side a frame). With VISIBILITY the Y
+// pass writes the texture Bevy's PBR reads, as compose would have
+// (`DynamicAoView::filter_is_last`). `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
@@ -92,7 +92,8 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
             n0 = decode_normal(textureLoad(normal, pixel, 0).xyz);
         }
         let reach = i32(settings.blur_detail_reach);
-        let detail = fine_detail(view, depth, pixel, center_depth, n0, reach, settings.image_space_radius, 0, 4);
+        let r = settings.image_space_radius;
+        let detail = fine_detail(view, depth, pixel, center_depth, n0, reach, r, 0, 4);
         value.x = with_fine_detail(value.x, detail, settings.intensity);
     }
 #endif

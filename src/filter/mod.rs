@@ -32,7 +32,8 @@
 //!
 //! Without accumulation the blur's Y pass then multiplies into the ray march's occlusion a
 //! fine-detail term read from the front layer at full resolution (`AoBlur::detail_reach`; under
-//! accumulation the ray march adds it itself, a side a frame; `shaders/fine_detail.wgsl`): along the pixel's row and column,
+//! accumulation the ray march adds it itself, a side a frame; `shaders/fine_detail.wgsl`): along
+//! the pixel's row and column,
 //! each side's highest surface within a few pixels as a horizon, occluding a cosine-weighted
 //! hemisphere by the square of its elevation's sine. It is not from the papers: the ray march's
 //! steps, a sixth of R apart, step over grooves and creases a pixel or two wide, which the front

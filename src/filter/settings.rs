@@ -26,10 +26,10 @@ pub struct AoBlur {
     pub radius: u32,
     /// Half-width of the image-space occlusion's kernel under temporal accumulation
     /// ([`AoTemporal`](crate::AoTemporal)). By default the blur does not run there: the history
-    /// already averages the noise it would, its converged error against ground truth is within
-    /// 0.0013 of the blurred one on our scenes, and its two full-resolution passes cost more than every other
-    /// pass of the default together (on lavapipe about 20 ms at 640×480 against 13 ms, BENCHMARKS.md,
-    /// "The default runs no blur"). Units: pixels. Valid: 0 (off) ..= 16.
+    /// already averages the noise it would (converged error against ground truth within 0.0013
+    /// of the blurred one on our scenes), and its two full-resolution passes cost more than every
+    /// other pass of the default together (on lavapipe about 20 ms a frame at 640×480 against
+    /// 15 ms; BENCHMARKS.md, "The default runs no blur"). Units: pixels. Valid: 0 (off) ..= 16.
     /// Default: [`DEFAULT_ACCUMULATED_BLUR_RADIUS`].
     pub accumulated_radius: u32,
     /// How fast a sample's weight falls with its depth difference, relative to the centre
@@ -50,7 +50,7 @@ pub struct AoBlur {
     /// creases narrower than the ray march's steps are what the rays step over; this term
     /// restores them (BENCHMARKS.md, "The blur restores fine detail"). Under temporal
     /// accumulation the ray march adds it itself, one of the four sides a frame, and the history
-    /// averages the four (a sixth of what all four sides a frame cost at full resolution);
+    /// averages the four (a sixteenth of the reads of all four sides a frame at full resolution);
     /// without accumulation the blur's last pass adds all four, where the blur runs (`radius`
     /// above 0). It applies to the ray march only (the other techniques sample the front layer
     /// near the pixel themselves). 0 turns it off. Units: pixels. Valid: 0 ..=

@@ -129,7 +129,14 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, w: Window) {
 }
 
 // `sum` (the weighted channels, and the weights in z) with texel `t` added for pixel `x`.
-fn add(sum: vec3<f32>, t: Texel, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> vec3<f32> {
+fn add(
+    sum: vec3<f32>,
+    t: Texel,
+    x: vec2<i32>,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    h_x: f32,
+) -> vec3<f32> {
     let w = weight(t, x, p, n, h_x);
     return sum + vec3<f32>(w * t.value, w);
 }

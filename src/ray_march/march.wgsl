@@ -152,7 +152,8 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     if settings.march_detail_reach > 0u {
         let reach = i32(settings.march_detail_reach);
         let side = i32(settings.frame_index & 3u);
-        let detail = fine_detail(view, front_depth, r.pixel, r.depth, r.normal, reach, radius, side, 1);
+        let detail =
+            fine_detail(view, front_depth, r.pixel, r.depth, r.normal, reach, radius, side, 1);
         value = with_fine_detail(value, detail, settings.intensity);
     }
     textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));

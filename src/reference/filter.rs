@@ -235,8 +235,15 @@ pub fn with_fine_detail(
     occlusion
         .iter()
         .zip(fine_detail(nd, view, reach, radius))
-        .map(|(o, d)| 1.0 - (1.0 - o) * (1.0 - (intensity * d).min(1.0)))
+        .map(|(o, d)| join_fine_detail(*o, d, intensity))
         .collect()
+}
+
+/// `occlusion` with the fine-detail term `detail` (scaled by `intensity`) joined as an
+/// independent occluder, 1 − (1 − occlusion)(1 − min(intensity · detail, 1)): `with_fine_detail`
+/// in `shaders/fine_detail.wgsl`.
+pub fn join_fine_detail(occlusion: f32, detail: f32, intensity: f32) -> f32 {
+    1.0 - (1.0 - occlusion) * (1.0 - (intensity * detail).min(1.0))
 }
 
 #[cfg(test)]

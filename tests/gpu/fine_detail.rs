@@ -6,7 +6,7 @@
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::filter::{
-    FINE_DETAIL_SIDES, fine_detail, fine_detail_sides, with_fine_detail,
+    FINE_DETAIL_SIDES, fine_detail, fine_detail_sides, join_fine_detail, with_fine_detail,
 };
 use bevy_dynamic_ao::reference::metrics::{high_frequency_error, rmse};
 
@@ -403,7 +403,7 @@ fn the_ray_marchs_fine_detail_term_takes_a_side_a_frame() {
                     let cpu: Vec<f32> = occlusion
                         .iter()
                         .zip(&sides[side])
-                        .map(|(o, d)| (1.0 - o) * (1.0 - d.min(1.0)))
+                        .map(|(o, d)| 1.0 - join_fine_detail(*o, *d, 1.0))
                         .collect();
                     let (mean, p99) = difference_stats(&on.visibility, &cpu, &mask);
                     (side, mean, p99)
