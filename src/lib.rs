@@ -20,7 +20,9 @@
 //!    single-sampled, viewport-sized layer first on MSAA and split-screen cameras); our
 //!    [`nd_buffer`] pass draws the back faces into a second layer (Shanmugam & Arikan 2007, §4.2).
 //! 2. [`ray_march`] (the default) marches a few rays per pixel through both layers at half
-//!    resolution (Bavoil & Sainz 2008), and [`temporal`] accumulates them over frames through
+//!    resolution (Bavoil & Sainz 2008), counting a step just behind the back-face layer as
+//!    solid, since models are shells ([`RayMarchParams::thickness`]), and [`temporal`]
+//!    accumulates them over frames through
 //!    Bevy's motion vectors; or [`near_field`] computes image-space occlusion from both layers
 //!    (S&A eq. 2–4), or [`horizon`] horizon-based occlusion from the front layer.
 //! 3. [`spheres`] adds far-field occlusion from the proxies (boxes, or the paper's spheres) of

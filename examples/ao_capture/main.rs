@@ -5,7 +5,8 @@
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--accumulated-blur PIXELS] \
-//!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] \
+//!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] \
+//!     [--thickness F] [--half-res] \
 //!     [--far-blend count-once|add|max] \
 //!     [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \

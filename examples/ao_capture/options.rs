@@ -4,13 +4,13 @@ use std::path::PathBuf;
 
 use bevy_dynamic_ao::settings::DEFAULT_TEMPORAL_FRAMES;
 use bevy_dynamic_ao::voxels::VoxelFalloff;
-use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, AoTemporal, FarFieldBlend};
+use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, AoTemporal, FarFieldBlend, RayMarchParams};
 
 use crate::common::parse_number;
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -96,6 +96,9 @@ pub struct Options {
     pub blur_normal_sharpness: f32,
     /// Reach of the blur's fine-detail term (`AoBlur::detail_reach`), pixels (0 = off).
     pub blur_detail: u32,
+    /// How far behind the back-face layer the ray march's steps count as blocked, a fraction of
+    /// R (`RayMarchParams::thickness`).
+    pub thickness: f32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
     /// Frames rendered after the scene is posed, before the capture (default: 4, or twice the
@@ -143,6 +146,7 @@ impl Options {
         let mut blur_sharpness = AoBlur::default().sharpness;
         let mut blur_normal_sharpness = AoBlur::default().normal_sharpness;
         let mut blur_detail = AoBlur::default().detail_reach;
+        let mut thickness = RayMarchParams::default().thickness;
         let mut half_resolution = false;
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
@@ -250,6 +254,12 @@ impl Options {
                         ));
                     }
                 }
+                "--thickness" => {
+                    thickness = parse_number("--thickness", &value()?, 0.0f32)?;
+                    if thickness > 1.0 {
+                        return Err("--thickness is a fraction of R, at most 1".to_string());
+                    }
+                }
                 "--time" => {
                     let text = value()?;
                     time = text
@@ -334,6 +344,7 @@ impl Options {
             blur_sharpness,
             blur_normal_sharpness,
             blur_detail,
+            thickness,
             half_resolution,
             frames: frames.unwrap_or_else(|| {
                 if temporal.unwrap_or(preset.temporal()).enabled {

@@ -119,6 +119,10 @@ fn scene_ready(
                 normal_sharpness: options.blur_normal_sharpness,
                 detail_reach: options.blur_detail,
             },
+            ray_march: RayMarchParams {
+                thickness: options.thickness,
+                ..options.preset.ray_march()
+            },
             half_resolution: options.half_resolution
                 || (options.default_technique && options.preset.half_resolution()),
             spheres: options.far == Some(FarTerm::Spheres),

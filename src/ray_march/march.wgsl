@@ -32,8 +32,9 @@ fn view_z(rows: DepthRows, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> f32
 }
 
 // Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
-// geometry the two layers bound, or behind a sheet thinner than a step (`step`, metres) that the
-// previous step, at depth `previous_z`, lay in front of.
+// geometry the two layers bound, less than `settings.ray_march_thickness` metres behind the
+// back-face layer, or behind a sheet thinner than a step (`step`, metres) that the previous step,
+// at depth `previous_z`, lay in front of.
 fn blocked(
     z: f32,
     previous_z: f32,
@@ -68,10 +69,16 @@ fn blocked(
         if ndc.z > back {
             return 1;
         }
+        // The layer holds only the nearest back face: behind it may be air or more of the
+        // model (a shell's inner surface lies millimetres behind its outer one), so a step just
+        // behind it counts as blocked (`RayMarchParams::thickness` says why).
+        let back_z = view_z(rows, q, size, back);
+        if back_z - z < settings.ray_march_thickness {
+            return 1;
+        }
         // A wall of one polygon has its back face where its front is: no step lands between
         // them, so a ray through it shows only as a step in front and the next one behind.
         let front_z = view_z(rows, q, size, front);
-        let back_z = view_z(rows, q, size, back);
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }

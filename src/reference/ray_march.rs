@@ -18,17 +18,21 @@ pub struct RayMarchInputs {
     pub elevations: u32,
     /// Steps per ray.
     pub steps: u32,
+    /// How far behind the back-face layer a step still counts as blocked, metres
+    /// ([`RayMarchParams::thickness`](crate::RayMarchParams::thickness) × R).
+    pub thickness: f32,
 }
 
-/// 1 blocked (inside the solid the layers bound, or behind a sheet thinner than `step` that the
-/// previous step, at depth `previous_z`, lay in front of), 0 free, −1 left the screen.
+/// 1 blocked (inside the solid the layers bound, less than `thickness` behind the back-face
+/// layer, or behind a sheet thinner than `step` that the previous step, at depth `previous_z`,
+/// lay in front of), 0 free, −1 left the screen.
 fn blocked(
     nd: &NdBuffer,
     view: &ViewMatrices,
     x: Vec3,
     previous_z: f32,
     step: f32,
-    radius: f32,
+    inputs: &RayMarchInputs,
 ) -> i32 {
     let (w, h) = (nd.width, nd.height);
     let clip = view.clip_from_view * x.extend(1.0);
@@ -53,10 +57,13 @@ fn blocked(
             return 1;
         }
         let back_z = view.view_position(q.x, q.y, w, h, back.depth).z;
+        if back_z - x.z < inputs.thickness {
+            return 1;
+        }
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return i32::from(crossed);
     }
-    i32::from(front_z - x.z < radius)
+    i32::from(front_z - x.z < inputs.radius)
 }
 
 /// Occlusion (0 = open) of every pixel, row-major.
@@ -112,7 +119,7 @@ pub fn pixel_occlusion(
             for s in 0..inputs.steps {
                 let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
                 let previous_z = origin.z + dir.z * (t - step).max(0.0);
-                let state = blocked(nd, view, origin + dir * t, previous_z, step, inputs.radius);
+                let state = blocked(nd, view, origin + dir * t, previous_z, step, inputs);
                 if state != 0 {
                     hits += u32::from(state == 1);
                     break;

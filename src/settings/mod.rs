@@ -14,7 +14,7 @@ pub use crate::filter::settings::{
 };
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};
-pub use crate::ray_march::settings::RayMarchParams;
+pub use crate::ray_march::settings::{DEFAULT_RAY_MARCH_THICKNESS, RayMarchParams};
 pub use crate::temporal::settings::{AoTemporal, DEFAULT_TEMPORAL_FRAMES};
 pub use preset::AoPreset;
 

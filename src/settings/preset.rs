@@ -107,6 +107,7 @@ impl AoPreset {
             directions,
             elevations,
             steps,
+            ..RayMarchParams::default()
         }
     }
 

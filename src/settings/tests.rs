@@ -135,3 +135,27 @@ fn problems_name_each_bad_value_and_its_replacement() {
         ]
     );
 }
+
+#[test]
+fn the_ray_marchs_thickness_is_a_share_of_r_between_0_and_1() {
+    let with = |thickness| RayMarchParams {
+        thickness,
+        ..default()
+    };
+    assert_eq!(
+        with(f32::NAN).sanitized().thickness,
+        DEFAULT_RAY_MARCH_THICKNESS
+    );
+    assert_eq!(with(-0.5).sanitized().thickness, 0.0);
+    assert_eq!(with(3.0).sanitized().thickness, 1.0);
+    assert_eq!(with(0.3).sanitized().thickness, 0.3);
+    let bad = DynamicAo::default().with_ray_march(with(f32::INFINITY));
+    assert_eq!(
+        bad.problems(),
+        [format!(
+            "ray_march {:?} is out of range; using {:?}",
+            bad.ray_march,
+            with(1.0)
+        )]
+    );
+}

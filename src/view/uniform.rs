@@ -50,6 +50,9 @@ pub(crate) struct DynamicAoUniform {
     pub ray_march_directions: u32,
     pub ray_march_elevations: u32,
     pub ray_march_steps: u32,
+    /// How far behind the back-face layer a step of the ray march still counts as blocked,
+    /// metres ([`crate::RayMarchParams::thickness`] × the image-space radius).
+    pub ray_march_thickness: f32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
     /// Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 where they
@@ -213,6 +216,7 @@ pub(super) fn extract_views(
                 ray_march_directions: rays.directions,
                 ray_march_elevations: rays.elevations,
                 ray_march_steps: rays.steps,
+                ray_march_thickness: rays.thickness * near_radius,
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 far_resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),

@@ -212,11 +212,15 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
     }
 }
 
-/// Each term joined to the crate's default image-space technique (the accumulated ray march)
-/// on characters standing on a floor, every mesh an occluder: never worse than the default alone
-/// at 0.75 m, and at 2 m, where most of what occludes a character lies beyond the near field's
-/// reach, at least a fifth better. Measured (this release's build): at 0.75 m the walker's error
-/// falls by 7–19%, CesiumMan's by 11–15%; at 2 m by 27–44%. CesiumMan needs `../shared/assets`.
+/// Each term joined to the crate's default image-space technique (the accumulated ray march) on
+/// characters standing on a floor, every mesh an occluder: never worse than the default alone at
+/// 0.75 m, and at 2 m, where most of what occludes a character lies beyond the near field's reach,
+/// at least a tenth better. Measured: at 0.75 m the walker's error falls by 0–9% and CesiumMan's
+/// moves by −3% to +1%; at 2 m they fall by 11–28%. Before the ray march counted steps just behind
+/// the back-face layer as blocked the default alone was farther from the truth and the far field's
+/// share larger (7–19%, 11–15%, 27–44%); joined, CesiumMan's error has fallen since and the
+/// walker's risen by 8–10% (its limbs are closed solids with air between them). CesiumMan needs
+/// `../shared/assets`.
 #[test]
 fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
     let mut scenes = vec![(far_scenes::walker_on_floor(), None)];
@@ -237,7 +241,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             alone + 0.0005
         });
         check_joined(&mut run, &bvh, scene.name, "default", 2.0, |alone| {
-            0.8 * alone
+            0.9 * alone
         });
     }
 }
@@ -253,7 +257,10 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// 1.10× (in the order below), on the bumpy ring 1.06× joined to the near field at 0.75 m.
 /// Joined to either image-space technique, each term must lower the error at both radii.
 /// Measured here, joined against alone, near field at 0.75 m and 2 m, then the default: spheres
-/// 0.63×, 0.47×, 0.60×, 0.82×; fields 0.72×, 0.59×, 0.57×, 0.68×.
+/// 0.63×, 0.46×, 0.75×, 0.73×; fields 0.70×, 0.55×, 0.69×, 0.55×. The default alone has been
+/// closer to the truth since its steps just behind the back-face layer count as blocked
+/// (0.0374 / 0.0416 against 0.0498 / 0.0421), so the far field's share of the gain shrank; joined,
+/// its errors moved by at most 0.0007.
 #[test]
 fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
     let scene = far_scenes::ring_on_floor();
@@ -281,7 +288,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.7), (2.0, 0.85)],
+            [(0.75, 0.77), (2.0, 0.75)],
         ),
         (
             FarTerm::Fields,
@@ -293,7 +300,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Fields,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.63), (2.0, 0.75)],
+            [(0.75, 0.71), (2.0, 0.57)],
         ),
     ];
     for (term, base, image_space, bounds) in cases {

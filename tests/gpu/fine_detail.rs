@@ -23,6 +23,7 @@ fn many_rays(steps: u32) -> DynamicAo {
             directions: 16,
             elevations: 8,
             steps,
+            ..RayMarchParams::default()
         },
         half_resolution: false,
         blur: AoBlur::OFF,
@@ -100,9 +101,11 @@ fn steps_limit_the_default_on_fine_detail() {
         errors.push(error);
     }
     let steps = &errors[4..8];
-    // Measured: 0.047 / 0.039 / 0.035 / 0.033 at 8 / 16 / 32 / 64 steps.
+    // Measured: 0.043 / 0.040 / 0.039 / 0.039 at 8 / 16 / 32 / 64 steps (0.047 / 0.039 / 0.035 /
+    // 0.033 before steps just behind the back-face layer counted as blocked: that thickness
+    // stands in for some of what finer steps found).
     assert!(
-        steps[1] < 0.92 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
+        steps[1] < 0.95 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
         "more steps per ray should bring the ray march closer to the truth: {steps:?}"
     );
     // Measured: 2 × 16 steps 0.053 against the default's 2 × 6 steps 0.063.
@@ -200,19 +203,20 @@ fn the_blurs_normal_weight_keeps_detail_on_third_party_models() {
              {bevy_hf:.4} |",
             scene.name
         );
-        // Measured (depth alone → with normals): RMSE 0.0722 → 0.0686 close up, 0.0298 →
-        // 0.0255, 0.0208 → 0.0204 and 0.0579 → 0.0560 on CesiumMan, the Fox and DamagedHelmet on
-        // a floor; high-frequency error 0.0540 → 0.0496, 0.0246 → 0.0199, 0.0138 → 0.0133 and
-        // 0.0380 → 0.0357.
-        if after >= before || after_hf >= 0.98 * before_hf {
+        // Measured (depth alone → with normals): RMSE 0.0657 → 0.0617 close up, 0.0267 →
+        // 0.0214, 0.0182 → 0.0180 and 0.0518 → 0.0496 on CesiumMan, the Fox and DamagedHelmet on
+        // a floor; high-frequency error 0.0538 → 0.0492, 0.0242 → 0.0190, 0.0146 → 0.0145 and
+        // 0.0378 → 0.0352. The Fox, whose creases the normal weight changes least, gained 4%
+        // before the ray march counted steps just behind the back-face layer as blocked, 1% since.
+        if after >= before || after_hf >= before_hf {
             failed.push(format!(
                 "{}: with normals {after:.4} / {after_hf:.4}, depth alone {before:.4} / \
                  {before_hf:.4}",
                 scene.name
             ));
         }
-        // Measured: 0.95× Bevy's high-frequency error close up (0.0496 against 0.0522), where
-        // the depth weight alone left 1.03×; 0.41–0.82× on the models on a floor.
+        // Measured: 0.94× Bevy's high-frequency error close up (0.0492 against 0.0522), where
+        // the depth weight alone left 1.03×; 0.45–0.81× on the models on a floor.
         if after_hf >= 0.99 * bevy_hf {
             failed.push(format!(
                 "{}: high-frequency error {after_hf:.4} against Bevy's {bevy_hf:.4}",
@@ -226,7 +230,7 @@ fn the_blurs_normal_weight_keeps_detail_on_third_party_models() {
 /// DamagedHelmet close up, as a user showing the model frames it: 1.8 m tall on a floor, filling
 /// half the view, against the CPU ray tracer at Bevy's radius and at 2 m (BENCHMARKS.md,
 /// "DamagedHelmet close up", which `ao_capture` on `docs/model_on_floor.py`'s scene measures the
-/// same way). The default stays under 0.45× Bevy's SSAO High's error, not under a third of it,
+/// same way). The default stays under 0.41× Bevy's SSAO High's error, not under a third of it,
 /// with less high-frequency error; the rays and the fine-detail term at full resolution, which
 /// the README offers for such close-ups, keep more of the one-pixel panel lines.
 #[test]
@@ -270,17 +274,18 @@ fn a_close_up_of_a_finely_detailed_model() {
         ours / bevy,
         full / bevy
     );
-    // Measured: 0.0688 against 0.1589 (0.43×; 0.38× while the blur added the fine-detail term at
-    // full resolution, 0.48× before the term), 0.0776 at 2 m; high-frequency error 0.0495
-    // against 0.0522 (0.95×; it was 0.75×).
-    assert!(ours < 0.45 * bevy, "{ours:.4} against Bevy's {bevy:.4}");
-    assert!(ours_wide < 0.08, "default at 2 m: {ours_wide:.4}");
+    // Measured: 0.0615 against 0.1589 (0.39×; 0.43× before steps just behind the back-face
+    // layer counted as blocked, 0.38× while the blur added the fine-detail term at full
+    // resolution, 0.48× before the term), 0.0671 at 2 m (0.0776); high-frequency error 0.0490
+    // against 0.0522 (0.94×; 0.95× before the thickness, 0.75× with the blur).
+    assert!(ours < 0.41 * bevy, "{ours:.4} against Bevy's {bevy:.4}");
+    assert!(ours_wide < 0.07, "default at 2 m: {ours_wide:.4}");
     assert!(
         ours_hf < bevy_hf,
         "high-frequency error {ours_hf:.4} against Bevy's {bevy_hf:.4}"
     );
-    // Measured at full resolution: 0.0568 (0.36×), high-frequency 0.0398 (0.76×), 0.0686 at
-    // 2 m.
+    // Measured at full resolution: 0.0471 (0.30×), high-frequency 0.0386 (0.74×), 0.0569 at
+    // 2 m (0.0568, 0.0398 and 0.0686 before the thickness).
     assert!(
         full < 0.85 * ours && full_hf < 0.8 * bevy_hf,
         "full resolution: {full:.4} / {full_hf:.4} against the default's {ours:.4} and Bevy's \

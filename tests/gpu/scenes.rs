@@ -128,6 +128,55 @@ pub fn open_room() -> SceneSpec {
         )
 }
 
+/// `mesh` seen from inside: its triangles wound the other way and its normals reversed, the inner
+/// surface of a shell.
+fn inside_out(mesh: impl Into<Mesh>) -> Mesh {
+    let mut mesh = mesh
+        .into()
+        .with_inverted_winding()
+        .expect("a primitive's mesh is an indexed triangle list");
+    if let Some(bevy::mesh::VertexAttributeValues::Float32x3(normals)) =
+        mesh.attribute_mut(Mesh::ATTRIBUTE_NORMAL)
+    {
+        for n in normals.iter_mut() {
+            *n = (-Vec3::from(*n)).to_array();
+        }
+    }
+    mesh
+}
+
+/// A hollow ball (0.45 m) and a hollow box (0.7 m) on a floor, each an outer surface and an inner
+/// one 2 cm inside it, as game models are built (DamagedHelmet's shell is a few millimetres
+/// thick): the back-face layer holds the inner surface just behind the outer one, not the far
+/// side of the model. The ball's lower half overhangs the floor around it.
+pub fn shells_on_floor() -> SceneSpec {
+    let wall = 0.02;
+    SceneSpec::new(
+        Transform::from_xyz(1.4, 1.5, 2.6).looking_at(Vec3::new(0.1, 0.35, 0.0), Vec3::Y),
+    )
+    .with(floor(10.0), Transform::IDENTITY)
+    .with(
+        Sphere::new(0.45).mesh().uv(48, 24),
+        Transform::from_xyz(-0.4, 0.45, 0.0),
+    )
+    .with(
+        inside_out(Sphere::new(0.45 - wall).mesh().uv(48, 24)),
+        Transform::from_xyz(-0.4, 0.45, 0.0),
+    )
+    .with(
+        Cuboid::new(0.7, 0.7, 0.7),
+        Transform::from_xyz(0.6, 0.35, -0.3).with_rotation(Quat::from_rotation_y(0.5)),
+    )
+    .with(
+        inside_out(Cuboid::new(
+            0.7 - 2.0 * wall,
+            0.7 - 2.0 * wall,
+            0.7 - 2.0 * wall,
+        )),
+        Transform::from_xyz(0.6, 0.35, -0.3).with_rotation(Quat::from_rotation_y(0.5)),
+    )
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [

@@ -264,11 +264,12 @@ fn captures_the_far_field_of_the_generated_scene() {
         // What `DynamicAo::default()` runs (the accumulated ray march) with each term joined.
         let default = error(&capture("default", radius, &[]));
         println!("ao_capture, R = {radius} m: default RMSE {default:.4}");
-        // Measured: 0.0136 at 0.75 m, 0.0488 at 2 m. The scene's floor is a slab: with each
-        // pixel's farthest back face in the ray march's layer, the air between a box and the
-        // slab's underside behind it read as solid, and this read 0.0467 / 0.0560 (BENCHMARKS.md,
-        // "DamagedHelmet close up", tried and not kept).
-        let bound = if radius < 1.0 { 0.016 } else { 0.052 };
+        // Measured: 0.0103 at 0.75 m, 0.0198 at 2 m (0.0136 / 0.0488 before steps just behind
+        // the back-face layer counted as blocked, `RayMarchParams::thickness`). The scene's floor
+        // is a slab: with each pixel's farthest back face in the ray march's layer, the air
+        // between a box and the slab's underside behind it read as solid, and this read 0.0467 /
+        // 0.0560 (BENCHMARKS.md, "DamagedHelmet close up", tried and not kept).
+        let bound = if radius < 1.0 { 0.012 } else { 0.022 };
         assert!(
             default < bound,
             "the default at {radius} m: RMSE {default:.4} against ground truth"
@@ -276,8 +277,10 @@ fn captures_the_far_field_of_the_generated_scene() {
         for term in ["spheres", "fields", "voxels"] {
             let joined = error(&capture(&format!("default+{term}"), radius, &[]));
             println!("  default+{term} {joined:.4}");
-            // Measured: 0.89–0.94 × the default's RMSE at 0.75 m, 0.35–0.37 × at 2 m.
-            let bound = if radius < 1.0 { 0.97 } else { 0.4 };
+            // Measured: 0.82–0.98 × the default's RMSE at 0.75 m, 0.60–0.68 × at 2 m (0.89–0.94
+            // and 0.35–0.37 against the default before the thickness, which itself gained most
+            // at 2 m; joined, the error fell at both radii).
+            let bound = if radius < 1.0 { 0.99 } else { 0.7 };
             assert!(
                 joined <= bound * default,
                 "default+{term} at {radius} m: {joined} vs {default}"
