@@ -25,7 +25,9 @@ use super::{
 #[reflect(Clone, Debug, PartialEq, Hash)]
 pub enum AoPreset {
     /// Horizon-based AO, low mode, 4 directions × 4 steps, at half resolution, not accumulated
-    /// (no motion vectors needed; its error is bias, which accumulation does not lower).
+    /// (no motion vectors needed; its error is bias, which accumulation does not lower). Not
+    /// accumulated, it blurs: on a CPU rasterizer (lavapipe) the blur's full-resolution passes
+    /// make it cost more than `Medium` and `High` over whole frames (README, preset table).
     Low,
     /// Ray march, 1 ray of 8 steps per frame at half resolution, accumulated.
     Medium,
