@@ -19,7 +19,9 @@ pub struct RayMarchParams {
     pub elevations: u32,
     /// Samples per ray. Valid: 1..=64. Default: 6.
     pub steps: u32,
-    /// How far behind the back-face layer a step still counts as blocked, as a fraction of R.
+    /// How far behind the back-face layer a step still counts as blocked, as a fraction of the
+    /// ray march's reach: R, or [`DynamicAo::near_field_radius`](crate::DynamicAo::near_field_radius)
+    /// where far-field terms count the rest.
     /// The layer holds only the nearest back face of each pixel, and most models are shells: an
     /// outer and an inner surface millimetres apart (DamagedHelmet's), or meshes that overlap.
     /// Behind that inner surface the ND-buffer cannot tell air from solid; counted as air, rays
