@@ -79,7 +79,7 @@ pub struct DynamicAo {
     /// Cross-bilateral blur of the occlusion (Bavoil & Sainz 2008). Default: [`AoBlur::default`].
     pub blur: AoBlur,
     /// Temporal accumulation of the image-space occlusion. Default: [`AoTemporal::default`]
-    /// (on, as every level above [`AoPreset::Low`] has it).
+    /// (on, as every [`AoPreset`] has it).
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et

@@ -19,7 +19,7 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// On by default: the default technique traces 2 rays per pixel and frame and relies on it to
 /// reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
 /// noise pattern without motion vectors, and give the technique a budget that suffices in one
-/// frame (as [`AoPreset::Low`](crate::AoPreset::Low) does).
+/// frame, with the blur on (every preset accumulates).
 ///
 /// Turning it on adds Bevy's `MotionVectorPrepass` to the camera (where an image-space technique
 /// or a voxel volume needs it), which stays when accumulation is turned off again (taking it away

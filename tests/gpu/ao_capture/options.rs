@@ -78,15 +78,21 @@ fn default_technique_and_timings() {
         );
     }
     assert!(!text.contains("timings:"), "no timings line unless asked");
-    // With --preset low, `default` is the Low preset: horizon-based AO at half resolution.
+    // With --preset low, `default` is the Low preset: the ray march at half resolution,
+    // accumulated, with Low's budget (which differs from the default's).
     let (low, _) = capture("default", &["--preset", "low"]);
-    let (horizon_half, _) = capture("horizon", &["--preset", "low", "--half-res"]);
+    let (ray_march_half, _) = capture("ray-march", &["--preset", "low", "--half-res"]);
     let differ = low
         .iter()
-        .zip(&horizon_half)
+        .zip(&ray_march_half)
         .filter(|(a, b)| a != b)
         .count();
     assert_eq!(differ, 0, "--technique default follows --preset");
+    let from_high = low.iter().zip(&accumulated).filter(|(a, b)| a != b).count();
+    assert!(
+        from_high > low.len() / 20,
+        "--preset low changed only {from_high} pixels of the default's capture"
+    );
 
     let timings = |technique: &str| -> (f64, f64, u32) {
         let (_, text) = capture(technique, &["--frames", "12", "--timings"]);
