@@ -6,7 +6,7 @@ use bevy_dynamic_ao::settings::DEFAULT_TEMPORAL_FRAMES;
 use bevy_dynamic_ao::voxels::VoxelFalloff;
 use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, AoTemporal, FarFieldBlend, RayMarchParams};
 
-use crate::common::parse_number;
+use crate::common::{parse_between, parse_number};
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
@@ -217,20 +217,9 @@ impl Options {
                     }
                 }
                 "--frames" => frames = Some(parse_number("--frames", &value()?, 1u32)?),
-                "--blur" => {
-                    blur = parse_number("--blur", &value()?, 0u32)?;
-                    if blur > AoBlur::MAX_RADIUS {
-                        return Err(format!("--blur is at most {} pixels", AoBlur::MAX_RADIUS));
-                    }
-                }
+                "--blur" => blur = parse_between(&flag, &value()?, 0, AoBlur::MAX_RADIUS)?,
                 "--accumulated-blur" => {
-                    accumulated_blur = parse_number("--accumulated-blur", &value()?, 0u32)?;
-                    if accumulated_blur > AoBlur::MAX_RADIUS {
-                        return Err(format!(
-                            "--accumulated-blur is at most {} pixels",
-                            AoBlur::MAX_RADIUS
-                        ));
-                    }
+                    accumulated_blur = parse_between(&flag, &value()?, 0, AoBlur::MAX_RADIUS)?;
                 }
                 "--blur-sharpness" => {
                     blur_sharpness = parse_number("--blur-sharpness", &value()?, 0.0f32)?;
@@ -246,20 +235,10 @@ impl Options {
                     }
                 }
                 "--blur-detail" => {
-                    blur_detail = parse_number("--blur-detail", &value()?, 0u32)?;
-                    if blur_detail > AoBlur::MAX_DETAIL_REACH {
-                        return Err(format!(
-                            "--blur-detail is at most {} pixels",
-                            AoBlur::MAX_DETAIL_REACH
-                        ));
-                    }
+                    blur_detail = parse_between(&flag, &value()?, 0, AoBlur::MAX_DETAIL_REACH)?;
                 }
-                "--thickness" => {
-                    thickness = parse_number("--thickness", &value()?, 0.0f32)?;
-                    if thickness > 1.0 {
-                        return Err("--thickness is a fraction of R, at most 1".to_string());
-                    }
-                }
+                // A fraction of R.
+                "--thickness" => thickness = parse_between(&flag, &value()?, 0.0, 1.0)?,
                 "--time" => {
                     let text = value()?;
                     time = text

@@ -94,6 +94,21 @@ pub fn parse_number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
     }
 }
 
+/// `text` as a number from `min` to `max`, both included, or the message a user reads.
+pub fn parse_between<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
+    flag: &str,
+    text: &str,
+    min: T,
+    max: T,
+) -> Result<T, String> {
+    match text.parse::<T>() {
+        Ok(v) if v >= min && v <= max => Ok(v),
+        _ => Err(format!(
+            "{flag} takes a number from {min} to {max}, got '{text}'"
+        )),
+    }
+}
+
 /// Bevy's default plugins without a window or winit; pipelines compile synchronously so the
 /// first frames are deterministic. The app is driven by `app.update()` or a zero-delay loop.
 pub fn headless_plugins() -> impl PluginGroup {

@@ -102,7 +102,15 @@ fn bad_input_gives_a_one_line_error() {
                 vec!["--blur".into(), "99".into()],
             ]
             .concat(),
-            "--blur",
+            "--blur takes a number from 0 to",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--thickness".into(), "2".into()],
+            ]
+            .concat(),
+            "--thickness takes a number from 0 to 1",
         ),
         (
             [
