@@ -22,7 +22,7 @@ use super::{
 /// its average over frames converges to the ground truth the ND-buffer can show; a handful of
 /// rays per pixel and frame at half resolution, accumulated, cost less than Bevy's SSAO. Every
 /// level accumulates: without accumulation the noise needs the blur, whose full-resolution passes
-/// cost more than the whole of `High` (README, preset table). For a still noise pattern without
+/// cost more than the whole of `High` on a CPU rasterizer (README, preset table). For a still noise pattern without
 /// motion vectors, set [`DynamicAo::temporal`] to [`AoTemporal::OFF`] and give the technique a
 /// budget that suffices in one frame.
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -65,13 +65,9 @@ impl AoPreset {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
-    /// The technique this level runs.
+    /// The technique this level runs (every level runs the ray march, with its own budget).
     pub fn technique(self) -> AoTechnique {
-        match self {
-            AoPreset::Low | AoPreset::Medium | AoPreset::High | AoPreset::Ultra => {
-                AoTechnique::RayMarch
-            }
-        }
+        AoTechnique::RayMarch
     }
 
     /// The near-field sample budget of this level.
