@@ -1,13 +1,13 @@
 //! Filtering of the occlusion buffer.
 //!
 //! At half resolution, a joint bilateral upsampling first brings the occlusion back to full
-//! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the 2 × 2
-//! low-resolution texels that bracket it (the paper's window is larger; these are the texels
-//! bilinear interpolation would read) with the product of Wendland kernels (eq. 3) over screen
-//! distance (support 4 pixels), normal difference 1 − n(x)·n(y) (support 2; the paper prints
-//! 1 + n(x)·n(y), which would favour opposite normals), world distance (support R) and AO
-//! difference (support 1). One invocation upsamples the 2 × 2 pixels of one texel, reading the
-//! 3 × 3 texels their brackets share once. Where the occlusion was accumulated, the upsampling
+//! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the
+//! low-resolution texels of the 3 × 3 around its own that lie within 2.5 pixels of it (4 to 6 of
+//! them) with the product of Wendland kernels (eq. 3) over screen distance (support 4 pixels),
+//! normal difference 1 − n(x)·n(y) (support 2; the paper prints 1 + n(x)·n(y), which would
+//! favour opposite normals), world distance (support R) and AO difference (support 1); the
+//! screen-distance weight of the texels farther away is under 0.03. One invocation upsamples the
+//! 2 × 2 pixels of one texel, reading the eight texels they share once. Where the occlusion was accumulated, the upsampling
 //! reads the temporal pass's history of this frame instead of its output: each history texel
 //! carries the linear depth and normal it was computed at, so a texel costs one read instead of
 //! a depth, a normal and a value read and an unprojection (the upsampling pass took about a

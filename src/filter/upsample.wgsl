@@ -2,13 +2,12 @@
 // 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
 // window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
 // difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
-// One invocation upsamples the 2 × 2 pixels of one texel, reading the 3 × 3 texels around it
-// once for the four (their depth, normal, position and value), and each pixel blends all nine:
-// the screen-distance kernel's support (4 pixels) leaves out those too far. Nine texels instead
-// of the 2 × 2 that bracket the pixel cost no read more, and average the accumulated noise over
-// a wider footprint where the guides agree (converged high-frequency error 9–13% lower on flat
-// scenes, none higher on DamagedHelmet; BENCHMARKS.md, "The default runs no blur"). The quad's
-// first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
+// One invocation upsamples the 2 × 2 pixels of one texel, reading the texels of the 3 × 3 around
+// it once for the four (their depth, normal, position and value), and each pixel blends those
+// within 2.5 pixels of it (`blend_sum`). They reach past the 2 × 2 that bracket the pixel, and
+// average the accumulated noise over a wider footprint where the guides agree (converged
+// high-frequency error 9–13% lower on flat scenes, none higher on DamagedHelmet; BENCHMARKS.md,
+// "The default runs no blur"). The quad's first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
 // as compose would have (`DynamicAoView::filter_is_last`). With GUIDE_TEXELS it reads the temporal
 // pass's history of this frame, whose texels carry their linear depth and normal beside the
 // occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
@@ -21,7 +20,7 @@
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::filter_output::store_filtered
 #import bevy_dynamic_ao::math::wendland
-#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, guide_weight}
+#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, screen_weight, surface_weight}
 #import bevy_dynamic_ao::history::unpack_history
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -93,17 +92,18 @@ fn pixel_position(x: vec2<i32>, dims: vec2<i32>, depth: f32) -> vec3<f32> {
 #endif
 }
 
-// The weight of texel `t` for pixel `x` (world position `p`, unit normal `n`, nearest texel's
-// summed channels `h_x`).
-fn weight(t: Texel, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
-    let w = guide_weight(t.guide, x, p, n, settings.image_space_radius, 2.0);
-    return w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
+// The weight of texel `t` for a pixel at world position `p` with unit normal `n`, whose quad's
+// texel holds the summed channels `h_x`; `screen` is w_d of the texel's distance to the pixel.
+fn weight(t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
+    let w = surface_weight(t.guide, p, n, settings.image_space_radius, 2.0);
+    return screen * w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
 }
 
-// The 3 × 3 texels around one texel `oo`, named by their offsets (m = −1, o = 0, p = +1; x
-// first). No arrays: CPU rasterizers spill those to memory.
+// The texels around one texel `oo` that a pixel of its quad blends, named by their offsets
+// (m = −1, o = 0, p = +1; x first). The corner (−1, −1) lies 2.8 pixels or more from all four
+// pixels and counts for none (see `blend_sum`). No arrays: CPU rasterizers spill those to
+// memory.
 struct Window {
-    mm: Texel,
     om: Texel,
     pm: Texel,
     mo: Texel,
@@ -114,8 +114,71 @@ struct Window {
     pp: Texel,
 }
 
-// Pixel `x` at `depth` blended from the window `w` of its quad's texel.
-fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, w: Window) {
+// `sum` (the weighted channels, and the weights in z) with texel `t` added at screen weight
+// `screen`.
+fn add(sum: vec3<f32>, t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> vec3<f32> {
+    let w = weight(t, screen, p, n, h_x);
+    return sum + vec3<f32>(w * t.value, w);
+}
+
+// The weighted sum (channels, and the weights in z) for quad pixel `quad` (0 the texel's own,
+// 1 right of it, 2 below, 3 diagonal) at world position `p` with unit normal `n`. Each pixel
+// blends the texels less than 2.5 pixels away (5, 6, 6 and 4 of the 3 × 3): w_d of those farther
+// is under 0.03, against 0.4–1 for the nearest, and skipping them spares 15 of 36 weights a quad.
+// The AO-difference weight compares each texel with the quad's own. The order is
+// `reference::filter`'s, the quad's own texel first.
+fn blend_sum(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec3<f32> {
+    let h_x = w.oo.value.x + w.oo.value.y;
+    var sum = vec3<f32>(0.0);
+    switch quad {
+        case 0u: {
+            let two = screen_weight(2.0);
+            sum = add(sum, w.oo, 1.0, p, n, h_x);
+            sum = add(sum, w.om, two, p, n, h_x);
+            sum = add(sum, w.mo, two, p, n, h_x);
+            sum = add(sum, w.po, two, p, n, h_x);
+            sum = add(sum, w.op, two, p, n, h_x);
+        }
+        case 1u: {
+            let one = screen_weight(1.0);
+            let knight = screen_weight(sqrt(5.0));
+            sum = add(sum, w.oo, one, p, n, h_x);
+            sum = add(sum, w.om, knight, p, n, h_x);
+            sum = add(sum, w.pm, knight, p, n, h_x);
+            sum = add(sum, w.po, one, p, n, h_x);
+            sum = add(sum, w.op, knight, p, n, h_x);
+            sum = add(sum, w.pp, knight, p, n, h_x);
+        }
+        case 2u: {
+            let one = screen_weight(1.0);
+            let knight = screen_weight(sqrt(5.0));
+            sum = add(sum, w.oo, one, p, n, h_x);
+            sum = add(sum, w.mo, knight, p, n, h_x);
+            sum = add(sum, w.po, knight, p, n, h_x);
+            sum = add(sum, w.mp, knight, p, n, h_x);
+            sum = add(sum, w.op, one, p, n, h_x);
+            sum = add(sum, w.pp, knight, p, n, h_x);
+        }
+        default: {
+            let diagonal = screen_weight(sqrt(2.0));
+            sum = add(sum, w.oo, diagonal, p, n, h_x);
+            sum = add(sum, w.po, diagonal, p, n, h_x);
+            sum = add(sum, w.op, diagonal, p, n, h_x);
+            sum = add(sum, w.pp, diagonal, p, n, h_x);
+        }
+    }
+    return sum;
+}
+
+// `blend` once the pixel's surface is known: position `p`, unit normal `n`, and that normal as
+// `normal_texture` encodes it.
+fn blend_at(x: vec2<i32>, quad: u32, p: vec3<f32>, n: vec3<f32>, encoded: vec3<f32>, w: Window) {
+    let sum = blend_sum(quad, p, n, w);
+    store(x, select(w.oo.value, sum.xy / sum.z, sum.z > 0.0), encoded);
+}
+
+// Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`.
+fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     if any(x >= dims) {
         return;
     }
@@ -125,36 +188,7 @@ fn blend(x: vec2<i32>, dims: vec2<i32>, depth: f32, w: Window) {
     }
     let p = pixel_position(x, dims, depth);
     let encoded = textureLoad(normal_texture, x, 0).xyz;
-    blend_at(x, p, decode_normal(encoded), encoded, w);
-}
-
-// `sum` (the weighted channels, and the weights in z) with texel `t` added for pixel `x`.
-fn add(
-    sum: vec3<f32>,
-    t: Texel,
-    x: vec2<i32>,
-    p: vec3<f32>,
-    n: vec3<f32>,
-    h_x: f32,
-) -> vec3<f32> {
-    let w = weight(t, x, p, n, h_x);
-    return sum + vec3<f32>(w * t.value, w);
-}
-
-// `blend` once the pixel's surface is known: position `p`, unit normal `n`, and that normal as
-// `normal_texture` encodes it. The AO-difference weight compares each texel with the quad's own.
-fn blend_at(x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, encoded: vec3<f32>, w: Window) {
-    let h_x = w.oo.value.x + w.oo.value.y;
-    var sum = add(vec3<f32>(0.0), w.oo, x, p, n, h_x);
-    sum = add(sum, w.mm, x, p, n, h_x);
-    sum = add(sum, w.om, x, p, n, h_x);
-    sum = add(sum, w.pm, x, p, n, h_x);
-    sum = add(sum, w.mo, x, p, n, h_x);
-    sum = add(sum, w.po, x, p, n, h_x);
-    sum = add(sum, w.mp, x, p, n, h_x);
-    sum = add(sum, w.op, x, p, n, h_x);
-    sum = add(sum, w.pp, x, p, n, h_x);
-    store(x, select(w.oo.value, sum.xy / sum.z, sum.z > 0.0), encoded);
+    blend_at(x, quad, p, decode_normal(encoded), encoded, w);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -167,7 +201,6 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let w = Window(
-        texel(l + vec2<i32>(-1, -1), low_dims),
         texel(l + vec2<i32>(0, -1), low_dims),
         texel(l + vec2<i32>(1, -1), low_dims),
         texel(l + vec2<i32>(-1, 0), low_dims),
@@ -184,14 +217,14 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
 #else
         let encoded = vec3<f32>(0.0);
 #endif
-        blend_at(x, w.oo.guide.p, w.oo.guide.n, encoded, w);
+        blend_at(x, 0u, w.oo.guide.p, w.oo.guide.n, encoded, w);
     } else {
         store(x, vec2<f32>(0.0), vec3<f32>(0.0));
     }
     let x1 = x + vec2<i32>(1, 0);
-    blend(x1, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), w);
+    blend(x1, 1u, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), w);
     let x2 = x + vec2<i32>(0, 1);
-    blend(x2, dims, textureLoad(depth_texture, min(x2, dims - 1), 0), w);
+    blend(x2, 2u, dims, textureLoad(depth_texture, min(x2, dims - 1), 0), w);
     let x3 = x + vec2<i32>(1, 1);
-    blend(x3, dims, textureLoad(depth_texture, min(x3, dims - 1), 0), w);
+    blend(x3, 3u, dims, textureLoad(depth_texture, min(x3, dims - 1), 0), w);
 }

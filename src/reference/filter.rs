@@ -20,7 +20,12 @@ pub fn wendland(t: f32, h: f32) -> f32 {
     s * s * s * s * (4.0 * t / h + 1.0)
 }
 
-/// The texels `filter/upsample.wgsl` blends for a pixel, as offsets from the pixel's own texel.
+/// Full-resolution pixels within which `filter/upsample.wgsl` blends a texel: w_d of the texels
+/// of the window farther away is under 0.03, and the shader skips them.
+const UPSAMPLE_REACH: f32 = 2.5;
+
+/// The texels `filter/upsample.wgsl` blends for a pixel (those within [`UPSAMPLE_REACH`]), as
+/// offsets from the pixel's own texel.
 const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
     (0, 0),
     (-1, -1),
@@ -80,13 +85,16 @@ pub fn joint_bilateral_upsample_pair(
                 if lx < 0 || ly < 0 || lx >= lw || ly >= lh || qx >= w || qy >= h {
                     continue;
                 }
+                let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
+                if screen >= UPSAMPLE_REACH {
+                    continue;
+                }
                 let q = nd.front[(qy * w + qx) as usize];
                 if q.depth <= 0.0 {
                     continue;
                 }
                 let v_y = low[(ly * lw + lx) as usize];
                 let h_y = v_y[0] + v_y[1];
-                let screen = (((x - qx) * (x - qx) + (y - qy) * (y - qy)) as f32).sqrt();
                 let world = p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
                 let weight = wendland(screen, 4.0)
                     * wendland(1.0 - t.normal.dot(q.normal), 2.0)

@@ -83,7 +83,8 @@ pub struct DynamicAo {
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
     /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
-    /// al. 2009, eq. 5–7, over the 3 × 3 texels around each pixel's own); the blur, where it
+    /// al. 2009, eq. 5–7, over the texels of the 3 × 3 around each pixel's own within 2.5
+    /// pixels of it); the blur, where it
     /// runs, then runs at full resolution. The sphere and field splats
     /// follow it (each texel evaluates one pixel of its 2 × 2; compose upsamples them over
     /// normals and positions). Default: `true` (as [`AoPreset::High`] has it).

@@ -70,13 +70,22 @@ fn texel_guide(
 // `reach` (metres) is the support of the world-distance weight, `bend` that of the normal
 // weight.
 fn guide_weight(g: Guide, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, reach: f32, bend: f32) -> f32 {
+    return screen_weight(length(vec2<f32>(x - g.y))) * surface_weight(g, p, n, reach, bend);
+}
+
+// w_d of a texel `distance` full-resolution pixels from the pixel it counts for.
+fn screen_weight(distance: f32) -> f32 {
+    return wendland(distance, WINDOW);
+}
+
+// `guide_weight` without w_d: how far the texel's surface agrees with the pixel's.
+fn surface_weight(g: Guide, p: vec3<f32>, n: vec3<f32>, reach: f32, bend: f32) -> f32 {
     if !g.on_surface {
         return 0.0;
     }
-    let w_d = wendland(length(vec2<f32>(x - g.y)), WINDOW);
     let w_n = wendland(1.0 - dot(n, g.n), bend);
     let w_p = wendland(distance(p, g.p), reach);
-    return w_d * w_n * w_p;
+    return w_n * w_p;
 }
 
 // The weight of texel `l` for pixel `x` (world position `p`, unit normal `n`).

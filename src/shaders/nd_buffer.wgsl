@@ -46,6 +46,14 @@ fn position_at_linear_depth(view: View, uv: vec2<f32>, z: f32) -> vec3<f32> {
     return vec3<f32>(x, y, view_z);
 }
 
+// Distance in front of the camera along its view axis of a point at reverse-Z depth `depth`,
+// metres: `linear_depth` without the viewport position, which Bevy's projections do not mix into
+// depth (two rows of the inverse projection instead of four).
+fn depth_to_linear(view: View, depth: f32) -> f32 {
+    let m = view.view_from_clip;
+    return -(m[2].z * depth + m[3].z) / (m[2].w * depth + m[3].w);
+}
+
 // Distance in front of the camera along its view axis of the point at viewport coordinates `uv`
 // and reverse-Z depth `depth`, metres.
 fn linear_depth(view: View, uv: vec2<f32>, depth: f32) -> f32 {

@@ -13,8 +13,9 @@
 //!   depth (within 5 %) and normal (cosine ≥ 0.9) match this surface count, weighted bilinearly;
 //!   where none does, the history starts again from this frame.
 //! - **Ghosting.** The history is clamped around the mean of this frame's values on the pixel's
-//!   plane in the 5 × 5 texels around it (each texel's linear depth within 2 % of the depth the
-//!   plane predicts there; the plane's slope from the nearer neighbour along each axis): within
+//!   plane in the 5 × 5 texels around it (each texel's reverse-Z depth, which is affine across
+//!   the screen on a plane, off the plane by no more than 2 % of the pixel's linear depth would
+//!   move it; the plane's slope from the nearer neighbour along each axis): within
 //!   1.5 standard errors of that mean plus 0.05. An occluder that moves away without a motion vector
 //!   on the receiver (a contact shadow on a still floor) leaves no trail; a history the clamp
 //!   moved by more than 0.03 counts as at most four frames, so the change settles quickly. The

@@ -48,8 +48,8 @@ const NORMAL_AGREEMENT: f32 = 0.9;
 // with the range, about 24 with this).
 const GAMMA: f32 = 1.5;
 const CLAMP_MARGIN: f32 = 0.05;
-// A texel of the window lies on the texel's plane where its linear depth is within this share of
-// the depth that plane predicts there.
+// A texel of the window lies on the texel's plane where its depth is within this share of the
+// texel's linear depth off the plane (`plane_tolerance` carries it into reverse-Z depth).
 const PLANE_TOLERANCE: f32 = 0.02;
 // Texels each side of the window (5 × 5 at the accumulated texture's resolution).
 const WINDOW: i32 = 2;
@@ -58,6 +58,14 @@ const WINDOW: i32 = 2;
 // move is the window's own noise or slope, and cutting there would keep creases noisy.
 const CLAMPED_FRAMES: f32 = 4.0;
 const CUT: f32 = 0.03;
+
+// How far in reverse-Z depth a point may lie off the plane of a texel at linear depth `z` and
+// reverse-Z depth `d`: PLANE_TOLERANCE of `z`, carried through the projection.
+fn plane_tolerance(z: f32, d: f32) -> f32 {
+    let p = view.clip_from_view;
+    let farther = -z * (1.0 + PLANE_TOLERANCE);
+    return abs((p[2][2] * farther + p[3][2]) / (p[2][3] * farther + p[3][3]) - d);
+}
 
 // Whether a point at linear depth `other_z` with normal `other_n` lies on the surface at `z`, `n`.
 fn same_surface(other_z: f32, other_n: vec3<f32>, z: f32, n: vec3<f32>) -> bool {
@@ -76,13 +84,21 @@ fn load_value(texel: vec2<i32>) -> vec2<f32> {
 // Texels along each side of a workgroup's tile: its 8 × 8 texels and the window around them.
 const TILE: i32 = 8 + 2 * WINDOW;
 // Each texel of a workgroup's tile, read once: the 5 × 5 windows of its 64 texels overlap, and
-// reading depth and value for each of the 25 taps was most of the pass. One vec2 per texel,
-// because on lavapipe a read from workgroup memory costs about what a texture read does, per
-// channel: this frame's value and its linear depth (0 where no surface is), or both channels
-// with PAIR. The window tells surfaces apart by depth against the texel's plane, without
+// reading depth and value for each of the 25 taps was most of the pass. Two half floats per
+// texel in one u32, because on lavapipe a read from workgroup memory costs about what a texture
+// read does, per channel: this frame's value and its reverse-Z depth as stored (0 where no
+// surface is), or both channels with PAIR. Reverse-Z depth is affine across the screen on a
+// plane (linear depth is not, under perspective), and keeping it as stored spares the tile an
+// unprojection per texel. The window tells surfaces apart by depth against the texel's plane, without
 // normals: they were two more channels and a decoding per tap, and the plane test has a converged
 // error no higher than theirs (BENCHMARKS.md, "The clamp window tests depth against a plane").
-var<workgroup> tile: array<vec2<f32>, TILE * TILE>;
+var<workgroup> tile: array<u32, TILE * TILE>;
+
+// Tile texel `i`, unpacked. Half floats keep 11 bits: a depth off by 0.05% against a plane
+// tolerance of 2%.
+fn tile_at(i: i32) -> vec2<f32> {
+    return unpack2x16float(tile[i]);
+}
 
 // Fills the tile of the workgroup whose first texel is `corner`: tile texel t holds texel
 // `corner - WINDOW + t`, clamped to the texture as the window's reads were.
@@ -90,15 +106,10 @@ fn load_tile(corner: vec2<i32>, lane: i32, dims: vec2<i32>, full: vec2<i32>) {
     for (var i = lane; i < TILE * TILE; i += 64) {
         let q = clamp(corner - WINDOW + vec2<i32>(i % TILE, i / TILE), vec2<i32>(0), dims - 1);
 #ifdef PAIR
-        tile[i] = load_value(q);
+        tile[i] = pack2x16float(load_value(q));
 #else
         let q_pixel = min(q * i32(temporal.scale), full - 1);
-        let q_depth = textureLoad(front_depth, q_pixel, 0);
-        let q_uv = (vec2<f32>(q_pixel) + 0.5) / vec2<f32>(full);
-        tile[i] = vec2<f32>(
-            load_value(q).x,
-            select(0.0, linear_depth(view, q_uv, q_depth), q_depth > 0.0),
-        );
+        tile[i] = pack2x16float(vec2<f32>(load_value(q).x, textureLoad(front_depth, q_pixel, 0)));
 #endif
     }
 }
@@ -140,7 +151,7 @@ fn range_bounds(local: vec2<i32>, value: vec2<f32>) -> array<vec2<f32>, 2> {
     var hi = value;
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
-            let v = tile[tile_index(local, vec2<i32>(dx, dy))];
+            let v = tile_at(tile_index(local, vec2<i32>(dx, dy)));
             lo = min(lo, v);
             hi = max(hi, v);
         }
@@ -148,33 +159,37 @@ fn range_bounds(local: vec2<i32>, value: vec2<f32>) -> array<vec2<f32>, 2> {
     return array<vec2<f32>, 2>(lo - vec2<f32>(CLAMP_MARGIN), hi + vec2<f32>(CLAMP_MARGIN));
 }
 
-// The change of linear depth per texel along x and y at the workgroup's texel `local` (depth
-// `z`), the plane the window's texels are held against: along each axis the smaller of the
+// The change of reverse-Z depth per texel along x and y at the workgroup's texel `local` (depth
+// `d`), the plane the window's texels are held against: along each axis the smaller of the
 // one-sided differences, so that a silhouette beside the texel does not tilt it.
-fn depth_slope(local: vec2<i32>, z: f32) -> vec2<f32> {
+fn depth_slope(local: vec2<i32>, d: f32) -> vec2<f32> {
     let ahead = vec2<f32>(
-        tile[tile_index(local, vec2<i32>(1, 0))].y,
-        tile[tile_index(local, vec2<i32>(0, 1))].y,
-    ) - z;
-    let behind = z - vec2<f32>(
-        tile[tile_index(local, vec2<i32>(-1, 0))].y,
-        tile[tile_index(local, vec2<i32>(0, -1))].y,
+        tile_at(tile_index(local, vec2<i32>(1, 0))).y,
+        tile_at(tile_index(local, vec2<i32>(0, 1))).y,
+    ) - d;
+    let behind = d - vec2<f32>(
+        tile_at(tile_index(local, vec2<i32>(-1, 0))).y,
+        tile_at(tile_index(local, vec2<i32>(0, -1))).y,
     );
     return select(behind, ahead, abs(ahead) < abs(behind));
 }
 
 // Mean of this frame's values on the texel's plane in the window, give or take GAMMA standard
-// errors of it and CLAMP_MARGIN. A background texel (depth 0) lies on no plane.
-fn mean_bounds(local: vec2<i32>, z: f32) -> array<vec2<f32>, 2> {
-    let slope = depth_slope(local, z);
+// errors of it and CLAMP_MARGIN. The texel lies at reverse-Z depth `d`, and `tolerance` is how far
+// in that depth a texel of the window may lie off the plane. A background texel (depth 0) lies
+// on no plane.
+fn mean_bounds(local: vec2<i32>, depth: f32, tolerance: f32) -> array<vec2<f32>, 2> {
+    // The plane goes through the texel's depth as the tile holds it.
+    let d = tile_at(tile_index(local, vec2<i32>(0))).y;
+    let slope = depth_slope(local, d);
     var sum = vec2<f32>(0.0);
     var sum_sq = vec2<f32>(0.0);
     var on_surface = 0.0;
     for (var dy = -WINDOW; dy <= WINDOW; dy++) {
         for (var dx = -WINDOW; dx <= WINDOW; dx++) {
-            let t = tile[tile_index(local, vec2<i32>(dx, dy))];
-            let predicted = z + dot(slope, vec2<f32>(f32(dx), f32(dy)));
-            if abs(t.y - predicted) > PLANE_TOLERANCE * z {
+            let t = tile_at(tile_index(local, vec2<i32>(dx, dy)));
+            let predicted = d + dot(slope, vec2<f32>(f32(dx), f32(dy)));
+            if abs(t.y - predicted) > tolerance {
                 continue;
             }
             let v = vec2<f32>(t.x, 0.0);
@@ -213,10 +228,10 @@ fn accumulate(
     let depth = textureLoad(front_depth, pixel, 0);
     let z = select(0.0, linear_depth(view, uv, depth), depth > 0.0);
 #else
-    // The tile already holds this texel's value and linear depth (0 on the background).
-    let own = tile[tile_index(local, vec2<i32>(0))];
-    let value = vec2<f32>(own.x, 0.0);
-    let z = own.y;
+    // The tile's depth is a half float; the history keeps the full one.
+    let value = load_value(texel);
+    let depth = textureLoad(front_depth, pixel, 0);
+    let z = select(0.0, linear_depth(view, uv, depth), depth > 0.0);
 #endif
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if z <= 0.0 || dot(n, n) == 0.0 {
@@ -228,7 +243,7 @@ fn accumulate(
     let bounds = range_bounds(local, value);
     let cut = 0.0;
 #else
-    let bounds = mean_bounds(local, z);
+    let bounds = mean_bounds(local, depth, plane_tolerance(z, depth));
     let cut = CUT;
 #endif
     let lo = bounds[0];
