@@ -7,8 +7,9 @@
 // within 2.5 pixels of it (`blend_sum`). They reach past the 2 × 2 that bracket the pixel, and
 // average the accumulated noise over a wider footprint where the guides agree (converged
 // high-frequency error 9–13% lower on flat scenes, none higher on DamagedHelmet; BENCHMARKS.md,
-// "The default runs no blur"). The quad's first pixel is the texel's own. With VISIBILITY it writes the texture Bevy's PBR reads,
-// as compose would have (`DynamicAoView::filter_is_last`). With GUIDE_TEXELS it reads the temporal
+// "The default runs no blur"). The quad's first pixel is the texel's own. With VISIBILITY it
+// writes the texture Bevy's PBR reads, as compose would have (`DynamicAoView::filter_is_last`).
+// With GUIDE_TEXELS it reads the temporal
 // pass's history of this frame, whose texels carry their linear depth and normal beside the
 // occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
 // 8-bit). With WRITE_NORMALS it also copies each pixel's front-layer normal, as read, into

@@ -89,9 +89,10 @@ const TILE: i32 = 8 + 2 * WINDOW;
 // read does, per channel: this frame's value and its reverse-Z depth as stored (0 where no
 // surface is), or both channels with PAIR. Reverse-Z depth is affine across the screen on a
 // plane (linear depth is not, under perspective), and keeping it as stored spares the tile an
-// unprojection per texel. The window tells surfaces apart by depth against the texel's plane, without
-// normals: they were two more channels and a decoding per tap, and the plane test has a converged
-// error no higher than theirs (BENCHMARKS.md, "The clamp window tests depth against a plane").
+// unprojection per texel. The window tells surfaces apart by depth against the texel's plane,
+// without normals: they were two more channels and a decoding per tap, and the plane test has a
+// converged error no higher than theirs (BENCHMARKS.md, "The clamp window tests depth against a
+// plane").
 var<workgroup> tile: array<u32, TILE * TILE>;
 
 // Tile texel `i`, unpacked. Half floats keep 11 bits: a depth off by 0.05% against a plane
@@ -175,10 +176,9 @@ fn depth_slope(local: vec2<i32>, d: f32) -> vec2<f32> {
 }
 
 // Mean of this frame's values on the texel's plane in the window, give or take GAMMA standard
-// errors of it and CLAMP_MARGIN. The texel lies at reverse-Z depth `d`, and `tolerance` is how far
-// in that depth a texel of the window may lie off the plane. A background texel (depth 0) lies
-// on no plane.
-fn mean_bounds(local: vec2<i32>, depth: f32, tolerance: f32) -> array<vec2<f32>, 2> {
+// errors of it and CLAMP_MARGIN; `tolerance` is how far in reverse-Z depth a texel of the window
+// may lie off the plane. A background texel (depth 0) lies on no plane.
+fn mean_bounds(local: vec2<i32>, tolerance: f32) -> array<vec2<f32>, 2> {
     // The plane goes through the texel's depth as the tile holds it.
     let d = tile_at(tile_index(local, vec2<i32>(0))).y;
     let slope = depth_slope(local, d);
@@ -243,7 +243,7 @@ fn accumulate(
     let bounds = range_bounds(local, value);
     let cut = 0.0;
 #else
-    let bounds = mean_bounds(local, depth, plane_tolerance(z, depth));
+    let bounds = mean_bounds(local, plane_tolerance(z, depth));
     let cut = CUT;
 #endif
     let lo = bounds[0];
