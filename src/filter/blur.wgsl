@@ -34,11 +34,6 @@ fn input_value(q: vec2<i32>) -> vec2<f32> {
 #endif
 }
 
-// Distance in front of the camera for a reverse-Z depth, metres: the same at every pixel.
-fn depth_ahead(d: f32) -> f32 {
-    return linear_depth(view, vec2<f32>(0.5), d);
-}
-
 fn blur(pixel: vec2<i32>, step: vec2<i32>) {
     let dims = vec2<i32>(textureDimensions(depth));
     if any(pixel >= dims) {
@@ -49,7 +44,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         store(pixel, vec2<f32>(0.0));
         return;
     }
-    let z0 = depth_ahead(center_depth);
+    let z0 = linear_depth(view, center_depth);
 #ifdef TWO_CHANNELS
     // The voxel term's (see `DynamicAoUniform::voxel_blur_radius`); it weighs by depth alone
     // (`AoBlur::normal_sharpness`).
@@ -76,7 +71,7 @@ fn blur(pixel: vec2<i32>, step: vec2<i32>) {
         if d <= 0.0 {
             continue;
         }
-        let dz = (depth_ahead(d) - z0) / z0 * settings.blur_sharpness;
+        let dz = (linear_depth(view, d) - z0) / z0 * settings.blur_sharpness;
         var bend = 0.0;
         if normal_sharpness > 0.0 {
             bend = (1.0 - dot(n0, decode_normal(textureLoad(normal, q, 0).xyz))) * normal_sharpness;

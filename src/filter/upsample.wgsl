@@ -122,12 +122,36 @@ fn add(sum: vec3<f32>, t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f
     return sum + vec3<f32>(w * t.value, w);
 }
 
+// The weighted sum for a pixel beside the quad's own texel `own` (right of it or below it): the
+// two texels on its axis, `own` and `next`, lie 1 pixel away, the four others, `a` to `d`, √5 (a
+// knight's move).
+fn beside_sum(
+    p: vec3<f32>,
+    n: vec3<f32>,
+    h_x: f32,
+    own: Texel,
+    next: Texel,
+    a: Texel,
+    b: Texel,
+    c: Texel,
+    d: Texel,
+) -> vec3<f32> {
+    let one = screen_weight(1.0);
+    let knight = screen_weight(sqrt(5.0));
+    var sum = add(vec3<f32>(0.0), own, one, p, n, h_x);
+    sum = add(sum, next, one, p, n, h_x);
+    sum = add(sum, a, knight, p, n, h_x);
+    sum = add(sum, b, knight, p, n, h_x);
+    sum = add(sum, c, knight, p, n, h_x);
+    return add(sum, d, knight, p, n, h_x);
+}
+
 // The weighted sum (channels, and the weights in z) for quad pixel `quad` (0 the texel's own,
 // 1 right of it, 2 below, 3 diagonal) at world position `p` with unit normal `n`. Each pixel
 // blends the texels less than 2.5 pixels away (5, 6, 6 and 4 of the 3 × 3): w_d of those farther
 // is under 0.03, against 0.4–1 for the nearest, and skipping them spares 15 of 36 weights a quad.
-// The AO-difference weight compares each texel with the quad's own. The order is
-// `reference::filter`'s, the quad's own texel first.
+// The AO-difference weight compares each texel with the quad's own. `reference::filter` adds the
+// same texels in another order, which moves the last bits only.
 fn blend_sum(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec3<f32> {
     let h_x = w.oo.value.x + w.oo.value.y;
     var sum = vec3<f32>(0.0);
@@ -141,24 +165,10 @@ fn blend_sum(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec3<f32> {
             sum = add(sum, w.op, two, p, n, h_x);
         }
         case 1u: {
-            let one = screen_weight(1.0);
-            let knight = screen_weight(sqrt(5.0));
-            sum = add(sum, w.oo, one, p, n, h_x);
-            sum = add(sum, w.om, knight, p, n, h_x);
-            sum = add(sum, w.pm, knight, p, n, h_x);
-            sum = add(sum, w.po, one, p, n, h_x);
-            sum = add(sum, w.op, knight, p, n, h_x);
-            sum = add(sum, w.pp, knight, p, n, h_x);
+            sum = beside_sum(p, n, h_x, w.oo, w.po, w.om, w.pm, w.op, w.pp);
         }
         case 2u: {
-            let one = screen_weight(1.0);
-            let knight = screen_weight(sqrt(5.0));
-            sum = add(sum, w.oo, one, p, n, h_x);
-            sum = add(sum, w.mo, knight, p, n, h_x);
-            sum = add(sum, w.po, knight, p, n, h_x);
-            sum = add(sum, w.mp, knight, p, n, h_x);
-            sum = add(sum, w.op, one, p, n, h_x);
-            sum = add(sum, w.pp, knight, p, n, h_x);
+            sum = beside_sum(p, n, h_x, w.oo, w.op, w.mo, w.mp, w.po, w.pp);
         }
         default: {
             let diagonal = screen_weight(sqrt(2.0));

@@ -3,7 +3,7 @@
 
 #import bevy_core_pipeline::fullscreen_vertex_shader::FullscreenVertexOutput
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::decode_normal
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position_at}
 
 @group(0) @binding(0) var<uniform> view: View;
 #ifdef MULTISAMPLED
@@ -60,10 +60,9 @@ fn sample_position(s: i32) -> vec2<f32> {
     return vec2(0.5);
 }
 
+// World position at viewport position `local` (pixels) and reverse-Z depth `depth`.
 fn unproject(local: vec2<f32>, depth: f32) -> vec3<f32> {
-    let uv = local / view.viewport.zw;
-    let world = view.world_from_clip * vec4(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return world.xyz / world.w;
+    return world_position_at(view, local / view.viewport.zw, depth);
 }
 
 // The depth at the centre of the pixel at `local` of the surface that sample `s` shows: where

@@ -4,32 +4,11 @@
 #import bevy_dynamic_ao::image_space_bindings::{
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
 }
-#import bevy_dynamic_ao::nd_buffer::pixel_world_size
+#import bevy_render::view::ndc_to_uv
+#import bevy_dynamic_ao::nd_buffer::{linear_depth, pixel_world_size}
 #import bevy_dynamic_ao::sampling::{pixel_pattern, frame_jitter}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
 #import bevy_dynamic_ao::fine_detail::{fine_detail, with_fine_detail}
-
-// The two rows of `view.view_from_clip` that give a view-space depth: a step needs only the
-// depth of the surface it is compared with, two dot products instead of a whole unprojection.
-struct DepthRows {
-    z: vec4<f32>,
-    w: vec4<f32>,
-}
-
-fn depth_rows() -> DepthRows {
-    let m = view.view_from_clip;
-    return DepthRows(
-        vec4<f32>(m[0].z, m[1].z, m[2].z, m[3].z),
-        vec4<f32>(m[0].w, m[1].w, m[2].w, m[3].w),
-    );
-}
-
-// View-space z of the centre of `pixel` at reverse-Z depth `depth`.
-fn view_z(rows: DepthRows, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> f32 {
-    let uv = (vec2<f32>(pixel) + 0.5) / size;
-    let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    return dot(rows.z, ndc) / dot(rows.w, ndc);
-}
 
 // Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
 // geometry the two layers bound, less than `settings.ray_march_thickness` metres behind the
@@ -40,7 +19,6 @@ fn blocked(
     previous_z: f32,
     step: f32,
     clip: vec4<f32>,
-    rows: DepthRows,
     size: vec2<f32>,
     dims: vec2<i32>,
     radius: f32,
@@ -49,7 +27,7 @@ fn blocked(
         return -1;
     }
     let ndc = clip.xyz / clip.w;
-    let q = vec2<i32>(floor(vec2<f32>((ndc.x + 1.0) * 0.5, (1.0 - ndc.y) * 0.5) * size));
+    let q = vec2<i32>(floor(ndc_to_uv(ndc.xy) * size));
     if any(q < vec2<i32>(0)) || any(q >= dims) {
         // The ray left the screen: nothing more is known along it.
         return -1;
@@ -72,17 +50,17 @@ fn blocked(
         // The layer holds only the nearest back face: behind it may be air or more of the
         // model (a shell's inner surface lies millimetres behind its outer one), so a step just
         // behind it counts as blocked (`RayMarchParams::thickness` says why).
-        let back_z = view_z(rows, q, size, back);
+        let back_z = -linear_depth(view, back);
         if back_z - z < settings.ray_march_thickness {
             return 1;
         }
         // A wall of one polygon has its back face where its front is: no step lands between
         // them, so a ray through it shows only as a step in front and the next one behind.
-        let front_z = view_z(rows, q, size, front);
+        let front_z = -linear_depth(view, front);
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }
-    let front_z = view_z(rows, q, size, front);
+    let front_z = -linear_depth(view, front);
     return select(0, 1, front_z - z < radius);
 }
 
@@ -122,7 +100,6 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // Where along each step a sample sits: under accumulation it moves every frame, so a few
     // steps per frame add up to a fine march.
     let step_offset = frame_jitter(pattern.hash, settings.frame_index);
-    let rows = depth_rows();
     let origin = p + n * start_height(p, n, pixel_world_size(view, -p.z, r.size.y));
     let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
     let step = radius / f32(settings.ray_march_steps);
@@ -143,7 +120,7 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
                 let t = (f32(s) + step_offset) / f32(settings.ray_march_steps) * radius;
                 let z = origin.z + dir.z * t;
                 let previous_z = origin.z + dir.z * max(t - step, 0.0);
-                let state = blocked(z, previous_z, step, clip + clip_dir * t, rows, r.size, dims, radius);
+                let state = blocked(z, previous_z, step, clip + clip_dir * t, r.size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);
                     break;

@@ -5,7 +5,7 @@
 #define_import_path bevy_dynamic_ao::fine_detail
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{position_in_view, position_at_linear_depth, depth_to_linear, pixel_world_size}
+#import bevy_dynamic_ao::nd_buffer::{position_in_view, position_at_linear_depth, linear_depth, pixel_world_size}
 
 // Occlusion of the surfaces within `reach` pixels of `pixel` along its row and column in
 // `depth` (the front layer at full resolution), over the `side_count` sides from `first_side`
@@ -49,7 +49,7 @@ fn fine_detail(
                 continue;
             }
             let q_uv = (vec2<f32>(q) + 0.5) / size;
-            let v = position_at_linear_depth(view, q_uv, depth_to_linear(view, d)) - p;
+            let v = position_at_linear_depth(view, q_uv, linear_depth(view, d)) - p;
             let distance = length(v);
             if distance <= 0.0 || distance >= reach_world {
                 continue;

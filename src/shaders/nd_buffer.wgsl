@@ -4,7 +4,7 @@
 
 #define_import_path bevy_dynamic_ao::nd_buffer
 
-#import bevy_render::view::View
+#import bevy_render::view::{View, uv_to_ndc, ndc_to_uv}
 
 // World-space unit normal from its `n * 0.5 + 0.5` encoding; zero where nothing was written.
 fn decode_normal(encoded: vec3<f32>) -> vec3<f32> {
@@ -16,17 +16,20 @@ fn decode_normal(encoded: vec3<f32>) -> vec3<f32> {
     return n * inverseSqrt(len2);
 }
 
+// World position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
+fn world_position_at(view: View, uv: vec2<f32>, depth: f32) -> vec3<f32> {
+    let world = view.world_from_clip * vec4<f32>(uv_to_ndc(uv), depth, 1.0);
+    return world.xyz / world.w;
+}
+
 // World position of the centre of `pixel` at reverse-Z depth `depth`, in a viewport of `size`.
 fn world_position(view: View, pixel: vec2<i32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
-    let uv = (vec2<f32>(pixel) + 0.5) / size;
-    let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
-    let world = view.world_from_clip * ndc;
-    return world.xyz / world.w;
+    return world_position_at(view, (vec2<f32>(pixel) + 0.5) / size, depth);
 }
 
 // View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
 fn position_in_view(view: View, uv: vec2<f32>, depth: f32) -> vec3<f32> {
-    let p = view.view_from_clip * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);
+    let p = view.view_from_clip * vec4<f32>(uv_to_ndc(uv), depth, 1.0);
     return p.xyz / p.w;
 }
 
@@ -36,7 +39,7 @@ fn position_in_view(view: View, uv: vec2<f32>, depth: f32) -> vec3<f32> {
 // view-space coordinate and on depth).
 fn position_at_linear_depth(view: View, uv: vec2<f32>, z: f32) -> vec3<f32> {
     let p = view.clip_from_view;
-    let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let ndc = uv_to_ndc(uv);
     // View space looks down −z; clip w is −z for a perspective projection and 1 for an
     // orthographic one.
     let view_z = -z;
@@ -47,17 +50,11 @@ fn position_at_linear_depth(view: View, uv: vec2<f32>, z: f32) -> vec3<f32> {
 }
 
 // Distance in front of the camera along its view axis of a point at reverse-Z depth `depth`,
-// metres: `linear_depth` without the viewport position, which Bevy's projections do not mix into
-// depth (two rows of the inverse projection instead of four).
-fn depth_to_linear(view: View, depth: f32) -> f32 {
+// metres. Bevy's projections do not mix the viewport position into depth, so two rows of the
+// inverse projection give it, wherever the point is on the screen.
+fn linear_depth(view: View, depth: f32) -> f32 {
     let m = view.view_from_clip;
     return -(m[2].z * depth + m[3].z) / (m[2].w * depth + m[3].w);
-}
-
-// Distance in front of the camera along its view axis of the point at viewport coordinates `uv`
-// and reverse-Z depth `depth`, metres.
-fn linear_depth(view: View, uv: vec2<f32>, depth: f32) -> f32 {
-    return -position_in_view(view, uv, depth).z;
 }
 
 // Distance in front of the camera along its view axis, metres.
@@ -100,7 +97,7 @@ fn nd_buffer_holds(
     }
     let dims = textureDimensions(front);
     let size = vec2<f32>(dims);
-    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let uv = ndc_to_uv(ndc);
     let pixel = min(vec2<i32>(uv * size), vec2<i32>(dims) - 1);
     let front_depth = textureLoad(front, pixel, 0);
     if front_depth <= 0.0 {

@@ -223,16 +223,10 @@ fn accumulate(
     }
     let pixel = min(texel * i32(temporal.scale), full - 1);
     let uv = (vec2<f32>(pixel) + 0.5) / vec2<f32>(full);
-#ifdef PAIR
-    let value = load_value(texel);
-    let depth = textureLoad(front_depth, pixel, 0);
-    let z = select(0.0, linear_depth(view, uv, depth), depth > 0.0);
-#else
     // The tile's depth is a half float; the history keeps the full one.
     let value = load_value(texel);
     let depth = textureLoad(front_depth, pixel, 0);
-    let z = select(0.0, linear_depth(view, uv, depth), depth > 0.0);
-#endif
+    let z = select(0.0, linear_depth(view, depth), depth > 0.0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if z <= 0.0 || dot(n, n) == 0.0 {
         store(texel, value, 0.0, 0.0, vec3<f32>(0.0));
