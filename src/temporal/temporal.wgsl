@@ -4,6 +4,8 @@
 // that place, each kept only where its depth and normal match this surface (a disocclusion keeps
 // none), and clamped around this frame's values on the same plane nearby, so a
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
+// The image-space history is clamped on every other frame only: a change waits a frame at most,
+// and noise needs no clamp (the average removes it), so the frames between save the tile.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
@@ -16,6 +18,8 @@ struct TemporalUniform {
     max_frames: f32,
     // Full-resolution pixels per texel of the accumulated texture, along each axis (1 or 2).
     scale: u32,
+    // 1: the history is clamped this frame (every other frame; always with PAIR).
+    clamp: u32,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -215,9 +219,16 @@ fn accumulate(
     let full = vec2<i32>(textureDimensions(front_depth));
     let texel = vec2<i32>(id.xy);
     let local = vec2<i32>(local_id.xy);
+#ifdef PAIR
+    let clamping = true;
+#else
+    let clamping = temporal.clamp != 0u;
+#endif
     // Every lane helps fill the tile, those past the texture's edge included.
-    load_tile(texel - local, i32(lane), dims, full);
-    workgroupBarrier();
+    if clamping {
+        load_tile(texel - local, i32(lane), dims, full);
+        workgroupBarrier();
+    }
     if any(texel >= dims) {
         return;
     }
@@ -237,7 +248,10 @@ fn accumulate(
     let bounds = range_bounds(local, value);
     let cut = 0.0;
 #else
-    let bounds = mean_bounds(local, plane_tolerance(z, depth));
+    var bounds = array<vec2<f32>, 2>(vec2<f32>(0.0), vec2<f32>(1.0));
+    if clamping {
+        bounds = mean_bounds(local, plane_tolerance(z, depth));
+    }
     let cut = CUT;
 #endif
     let lo = bounds[0];

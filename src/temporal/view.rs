@@ -28,6 +28,7 @@ pub(super) struct TemporalUniform {
     pub reset: u32,
     pub max_frames: f32,
     pub scale: u32,
+    pub clamp: u32,
 }
 
 /// A view's history of one accumulated quantity, kept across frames.
@@ -84,17 +85,21 @@ impl TemporalHistory {
     ) -> Option<TemporalHistory> {
         let key = history_key(frame.settings);
         let reset = frame.settings.temporal.reset || !frame.motion_vectors;
-        let uniform = |reset: bool| TemporalUniform {
+        // The clamp runs on alternate frames (the frames that read texture 0): it is there for
+        // changes the motion vectors miss, which it catches a frame later, not for noise, which
+        // the average removes (BENCHMARKS.md, "The clamp every other frame").
+        let uniform = |reset: bool, read: usize| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
             scale: frame.scale,
+            clamp: u32::from(read == 0),
         };
         match history {
             Some(history) if history.size == frame.size => {
                 history.read = 1 - history.read;
                 let reset = reset || history.settings != key;
                 history.settings = key;
-                history.uniform.set(uniform(reset));
+                history.uniform.set(uniform(reset, history.read));
                 history.uniform.write_buffer(device, queue);
                 None
             }
@@ -106,7 +111,7 @@ impl TemporalHistory {
                     settings: key,
                     uniform: UniformBuffer::default(),
                 };
-                history.uniform.set(uniform(true));
+                history.uniform.set(uniform(true, 0));
                 history.uniform.write_buffer(device, queue);
                 Some(history)
             }

@@ -108,9 +108,11 @@ fn steps_limit_the_default_on_fine_detail() {
         steps[1] < 0.95 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
         "more steps per ray should bring the ray march closer to the truth: {steps:?}"
     );
-    // Measured: 2 × 16 steps 0.053 against the default's 2 × 6 steps 0.063.
+    // Measured: 2 × 16 steps 0.0456 against the default's 2 × 6 steps 0.0479 (0.053 against
+    // 0.063 before steps just behind the back-face layer counted as blocked). With the temporal
+    // clamp every other frame the default's own error fell more than 16 steps' did.
     assert!(
-        errors[3] < 0.95 * errors[0],
+        errors[3] < 0.97 * errors[0],
         "16 steps per ray should lower the default's error: {:.4} against {:.4}",
         errors[3],
         errors[0]

@@ -238,18 +238,22 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 #[test]
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
-    // joined, over both radii. Measured (0.75 m, 2 m): the walker 1.02×, 0.75× alone and 1.10×,
-    // 1.10× joined (its limbs are closed solids with air between them, which the thickness
+    // joined, over both radii. Measured (0.75 m, 2 m): the walker 1.11×, 0.81× alone and 1.18×,
+    // 1.16× joined (its limbs are closed solids with air between them, which the thickness
     // counts as solid); the box and the wall outside the view 1.00× (the rays that would find
-    // them leave the screen); DamagedHelmet 0.89×, 0.92× and 0.94×, 0.94×; CesiumMan 0.84×,
-    // 0.85× and 0.95×, 0.98×; the Cornell box, walls of one polygon, 0.71×, 0.73× and 0.73×,
-    // 0.91×.
+    // them leave the screen); DamagedHelmet 0.89×, 0.92× and 0.94×, 0.94×; CesiumMan 0.86×,
+    // 0.83× and 0.95×, 0.99×; the Cornell box, walls of one polygon, 0.71×, 0.73× and 0.74×,
+    // 0.92×. While the temporal clamp ran every frame the walker read 1.02×, 0.75× and 1.10×,
+    // 1.11×, and CesiumMan 0.84×, 0.85× and 0.95×, 0.98×: clamping every other frame took the
+    // walker's thickness 0 from 0.0258 to 0.0248 at 0.75 m and its default from 0.0264 to
+    // 0.0276 (the clamp's pull toward the window's mean, a blur, likely softened the
+    // thickness's excess between the limbs).
     let bounds = [
-        ("walker on floor", 1.03, 1.11),
+        ("walker on floor", 1.12, 1.19),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
         ("DamagedHelmet on floor", 0.93, 0.95),
-        ("CesiumMan on floor", 0.86, 0.99),
+        ("CesiumMan on floor", 0.87, 1.0),
         ("CornellBox on floor", 0.75, 0.92),
     ];
     let shared = crate::models::shared_assets();
