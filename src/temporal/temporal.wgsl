@@ -4,8 +4,7 @@
 // that place, each kept only where its depth and normal match this surface (a disocclusion keeps
 // none), and clamped around this frame's values on the same plane nearby, so a
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
-// The image-space history is clamped on every other frame only: a change waits a frame at most,
-// and noise needs no clamp (the average removes it), so the frames between save the tile.
+// The image-space history is clamped on every other frame only (`temporal/mod.rs`, "Ghosting").
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
@@ -224,8 +223,8 @@ fn accumulate(
 #else
     let clamping = temporal.clamp != 0u;
 #endif
-    // Every lane helps fill the tile, those past the texture's edge included.
     if clamping {
+        // Every lane helps fill the tile, those past the texture's edge included.
         load_tile(texel - local, i32(lane), dims, full);
         workgroupBarrier();
     }

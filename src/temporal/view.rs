@@ -85,9 +85,8 @@ impl TemporalHistory {
     ) -> Option<TemporalHistory> {
         let key = history_key(frame.settings);
         let reset = frame.settings.temporal.reset || !frame.motion_vectors;
-        // The clamp runs on alternate frames (the frames that read texture 0): it is there for
-        // changes the motion vectors miss, which it catches a frame later, not for noise, which
-        // the average removes (BENCHMARKS.md, "The clamp every other frame").
+        // The image-space clamp runs on the frames that read texture 0, every other frame (why:
+        // the module's docs, "Ghosting").
         let uniform = |reset: bool, read: usize| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
