@@ -29,9 +29,10 @@ pub fn forget(store: &mut DiagnosticsStore) {
     }
 }
 
-/// The one line `--timings` prints on stdout (each pass's mean goes to stderr): `ao_gpu_ms`, the mean per frame of the AO passes summed;
-/// `frame_gpu_ms`, of every pass with a GPU time span; `frames`, how many frames the AO means
-/// are over (0, with `nan` times, where the adapter has no timestamp queries).
+/// The one line `--timings` prints on stdout: `ao_gpu_ms`, the mean per frame of the AO passes
+/// summed; `frame_gpu_ms`, of every pass with a GPU time span; `frames`, how many frames the AO
+/// means are over (0, with `nan` times, where the adapter has no timestamp queries). Each pass's
+/// mean, and a warning for each AO span that missed its work, go to stderr.
 pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
     let (mut ao, mut all, mut frames) = (0.0, 0.0, None::<usize>);
     for diagnostic in store.iter() {
@@ -45,6 +46,10 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
         if is_ao_pass(name, bevy_ssao) {
             ao += mean;
             let measured = diagnostic.history_len();
+            if let Some(warning) = empty_span_warning(name, diagnostic.values().copied(), measured)
+            {
+                eprintln!("{warning}");
+            }
             frames = Some(frames.map_or(measured, |f| f.min(measured)));
         }
     }
@@ -54,6 +59,27 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
         }
         _ => "timings: ao_gpu_ms=nan frame_gpu_ms=nan frames=0".to_string(),
     }
+}
+
+/// A span under this many milliseconds bracketed none of its pass's work: lavapipe writes some
+/// compute passes' two timestamps with the work outside them (BENCHMARKS.md, "Per-frame spans").
+const EMPTY_SPAN_MS: f64 = 0.2;
+
+/// A warning for stderr where the span `name` read under [`EMPTY_SPAN_MS`] in a quarter or more
+/// of its `measured` frames (`values`, ms): its mean, and `ao_gpu_ms` with it, leave that work
+/// out, so the figure understates the pass.
+fn empty_span_warning(
+    name: &str,
+    values: impl Iterator<Item = f64>,
+    measured: usize,
+) -> Option<String> {
+    let empty = values.filter(|ms| *ms < EMPTY_SPAN_MS).count();
+    (measured > 0 && empty * 4 >= measured).then(|| {
+        format!(
+            "timings: warning: span {name} read under {EMPTY_SPAN_MS} ms in {empty} of {measured} \
+             frames; the adapter's timestamps left that work out, so ao_gpu_ms understates it"
+        )
+    })
 }
 
 #[cfg(test)]
@@ -69,5 +95,21 @@ mod tests {
         assert!(!is_ao_pass("ssao", false));
         assert_eq!(gpu_span("render/ssao/elapsed_gpu"), Some("ssao"));
         assert_eq!(gpu_span("render/ssao/elapsed_cpu"), None);
+    }
+
+    #[test]
+    fn spans_that_missed_their_work_are_named() {
+        // 2 of 8 frames empty: a quarter, so the span is named, with both counts.
+        let values = [9.8, 0.0, 10.1, 0.1, 19.7, 9.6, 20.3, 12.6];
+        let warning = empty_span_warning("dynamic_ao_temporal", values.into_iter(), 8).unwrap();
+        assert!(warning.starts_with("timings: warning: span dynamic_ao_temporal"));
+        assert!(warning.contains("in 2 of 8 frames"), "{warning}");
+        // 1 of 8 is not enough, and nothing measured warns of nothing.
+        let values = [9.8, 0.0, 10.1, 10.3, 19.7, 9.6, 20.3, 12.6];
+        assert_eq!(
+            empty_span_warning("dynamic_ao_temporal", values.into_iter(), 8),
+            None
+        );
+        assert_eq!(empty_span_warning("ssao", std::iter::empty(), 0), None);
     }
 }
