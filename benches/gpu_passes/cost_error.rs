@@ -17,14 +17,15 @@ use std::path::Path;
 use bevy::pbr::ScreenSpaceAmbientOcclusionQualityLevel;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::metrics::rmse;
-use bevy_dynamic_ao::settings::DEFAULT_TEMPORAL_FRAMES;
 use plotters::prelude::*;
 
 use crate::harness::{BEVY_SSAO_RADIUS, Gpu, HEIGHT, WIDTH};
 use crate::scenes;
 
-/// Frames a capture of ours counts as converged: twice the default history.
-const CONVERGED: u32 = 2 * DEFAULT_TEMPORAL_FRAMES;
+/// Frames a capture of ours counts as converged: twice the frames the default history spans.
+fn converged_frames() -> u32 {
+    2 * DynamicAo::default().history_frames()
+}
 
 /// Bevy's SSAO levels, cheapest first.
 pub const BEVY_LEVELS: [ScreenSpaceAmbientOcclusionQualityLevel; 4] = [
@@ -84,7 +85,7 @@ pub fn measure() -> Measured {
                 ao.temporal.reset = true;
             });
             // The read-back copies the frame rendered after it is asked for.
-            let frame = gpu.frame(CONVERGED - 1);
+            let frame = gpu.frame(converged_frames() - 1);
             errors.push(rmse(&frame.visibility, &truth, Some(&mask)));
             if preset == AoPreset::default() {
                 ours = frame.visibility;
@@ -124,7 +125,7 @@ fn off_screen() -> [Vec<f32>; 3] {
     let ao = DynamicAo::default();
     let radius = ao.radius;
     let mut gpu = Gpu::new(&scene, ao);
-    let ours = gpu.frame(CONVERGED);
+    let ours = gpu.frame(converged_frames());
     let truth = ours.ground_truth(&bvh, radius);
     gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
     let bevy = gpu.frame(4);

@@ -2,9 +2,10 @@
 
 use std::path::PathBuf;
 
-use bevy_dynamic_ao::settings::DEFAULT_TEMPORAL_FRAMES;
 use bevy_dynamic_ao::voxels::VoxelFalloff;
-use bevy_dynamic_ao::{AoBlur, AoPreset, AoTechnique, AoTemporal, FarFieldBlend, RayMarchParams};
+use bevy_dynamic_ao::{
+    AoBlur, AoPreset, AoTechnique, AoTemporal, DynamicAo, FarFieldBlend, RayMarchParams,
+};
 
 use crate::common::{parse_between, parse_number};
 pub use crate::far_terms::FarTerm;
@@ -101,8 +102,9 @@ pub struct Options {
     pub thickness: f32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
-    /// Frames rendered after the scene is posed, before the capture (default: 4, or twice the
-    /// history length where the occlusion is accumulated, so the capture shows it converged).
+    /// Frames rendered after the scene is posed, before the capture (default: 4, or where the
+    /// occlusion is accumulated twice `DynamicAo::history_frames`, so the capture shows it
+    /// converged).
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,
@@ -296,20 +298,16 @@ impl Options {
         // Bevy's asset server wants an absolute folder to load from.
         let scene =
             std::fs::canonicalize(&scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+        let image_technique = technique.map(|(t, _)| match default_technique {
+            true => preset.technique(),
+            false => t,
+        });
         Ok(Some(Options {
             scene,
             width: width.ok_or_else(|| missing("--width"))?,
             height: height.ok_or_else(|| missing("--height"))?,
             radius: radius.ok_or_else(|| missing("--radius"))?,
-            technique: technique
-                .map(|(t, _)| {
-                    if default_technique {
-                        preset.technique()
-                    } else {
-                        t
-                    }
-                })
-                .ok_or_else(|| missing("--technique"))?,
+            technique: image_technique.ok_or_else(|| missing("--technique"))?,
             default_technique,
             timings,
             msaa,
@@ -326,10 +324,15 @@ impl Options {
             thickness,
             half_resolution,
             frames: frames.unwrap_or_else(|| {
-                if temporal.unwrap_or(preset.temporal()).enabled {
-                    2 * DEFAULT_TEMPORAL_FRAMES
-                } else {
-                    4
+                let ao = DynamicAo {
+                    technique: image_technique.unwrap_or_default(),
+                    ray_march: preset.ray_march(),
+                    temporal: temporal.unwrap_or(preset.temporal()),
+                    ..DynamicAo::default()
+                };
+                match ao.history_frames() {
+                    0 => 4,
+                    history => 2 * history,
                 }
             }),
             time,

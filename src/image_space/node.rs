@@ -43,12 +43,17 @@ pub(super) fn image_space_pass(
     };
     // One invocation per texel of the occlusion buffer (half size at half resolution).
     let scale = if ao_view.half_resolution { 2 } else { 1 };
+    let mut texels = (size + (scale - 1)) / scale;
+    // The checkerboard marches one texel of two in each row.
+    if ao_view.checkerboard {
+        texels.x = texels.x.div_ceil(2);
+    }
     let step = ComputeStep {
         label,
         pipeline: compute_pipeline,
         bind_group: &bind_group.0,
         offsets: &[view_offset.offset, settings_index.index()],
-        texels: (size + (scale - 1)) / scale,
+        texels,
     };
     record_passes(&mut ctx, label, true, &[step]);
 }

@@ -3,6 +3,7 @@
 
 #import bevy_dynamic_ao::image_space_bindings::{
     view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
+    copy_blur_normal,
 }
 #import bevy_render::view::ndc_to_uv
 #import bevy_dynamic_ao::nd_buffer::{linear_depth, pixel_world_size}
@@ -81,7 +82,20 @@ fn start_height(p: vec3<f32>, n: vec3<f32>, footprint: f32) -> f32 {
 
 @compute @workgroup_size(8, 8, 1)
 fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
-    let r = receiver(invocation);
+    // With the checkerboard (`RayMarchParams::checkerboard`) the dispatch covers half the
+    // columns, and invocation x marches texel 2x or 2x + 1, whichever agrees in parity with
+    // y + frame (`temporal.wgsl` tells the two apart the same way). A texel is marched every
+    // other frame, so it moves along the sample sequence every other frame: each of its marches
+    // takes the next pattern, and the fine-detail term the next side.
+    var texel = invocation;
+    var sequence = settings.frame_index;
+    if settings.ray_march_checkerboard != 0u {
+        texel.x = invocation.x * 2u + ((invocation.y + settings.frame_index) & 1u);
+        sequence = (settings.frame_index >> 1u) + 1u;
+        // The blur, where it runs, reads every pixel's normal.
+        copy_blur_normal(vec2<i32>(i32(texel.x ^ 1u), i32(texel.y)));
+    }
+    let r = receiver(texel);
     if !r.shade {
         return;
     }
@@ -94,12 +108,12 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let t2 = frame[1];
 
     let radius = settings.image_space_radius;
-    let pattern = pixel_pattern(r.pixel, 0x2c1b3c6du, settings.frame_index);
+    let pattern = pixel_pattern(r.pixel, 0x2c1b3c6du, sequence);
     let rotation = pattern.rotation;
     let jitter = pattern.jitter;
     // Where along each step a sample sits: under accumulation it moves every frame, so a few
     // steps per frame add up to a fine march.
-    let step_offset = frame_jitter(pattern.hash, settings.frame_index);
+    let step_offset = frame_jitter(pattern.hash, sequence);
     let origin = p + n * start_height(p, n, pixel_world_size(view, -p.z, r.size.y));
     let clip = view.clip_from_view * vec4<f32>(origin, 1.0);
     let step = radius / f32(settings.ray_march_steps);
@@ -135,7 +149,7 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
     // whole term's, for a quarter of its reads.
     if settings.march_detail_reach > 0u {
         let reach = i32(settings.march_detail_reach);
-        let side = i32(settings.frame_index & 3u);
+        let side = i32(sequence & 3u);
         let detail =
             fine_detail(view, front_depth, r.pixel, r.depth, r.normal, reach, radius, side, 1);
         value = with_fine_detail(value, detail, settings.intensity);

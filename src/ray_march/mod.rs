@@ -14,8 +14,10 @@
 //! the geometry the two layers hold. Its error against ray-traced ground truth shrinks as the
 //! ray count grows; under temporal accumulation the rays' rotation, elevations and step offsets
 //! move every frame, so two rays per pixel and frame at half resolution converge to what many
-//! more give in one frame (see [`AoPreset`](crate::AoPreset)). `reference::ray_march` is the CPU
-//! twin (of a single frame).
+//! more give in one frame (see [`AoPreset`](crate::AoPreset)); by default each frame marches only
+//! one texel of two, in a checkerboard that alternates
+//! ([`crate::RayMarchParams::checkerboard`], for about half the march's cost).
+//! `reference::ray_march` is the CPU twin (of a single frame).
 //!
 //! This folder holds the technique's settings (`settings.rs`) and shader (`march.wgsl`). Its pass
 //! is shared with the other image-space techniques and lives in `src/image_space/`:

@@ -179,6 +179,25 @@ impl DynamicAo {
         self.technique != AoTechnique::BevySsao
     }
 
+    /// Frames a still camera's image-space history takes to fill: 0 without accumulation,
+    /// [`AoTemporal::max_frames`] samples otherwise, which span twice the frames where the ray
+    /// march's [checkerboard](RayMarchParams::checkerboard) adds one to a texel every other frame.
+    /// Twice this shows the accumulated occlusion converged.
+    pub fn history_frames(&self) -> u32 {
+        if !self.temporal.enabled {
+            return 0;
+        }
+        self.temporal.frames() * if self.marches_checkerboard() { 2 } else { 1 }
+    }
+
+    /// Whether the ray march runs, accumulated, marching one texel of two each frame
+    /// ([`RayMarchParams::checkerboard`]).
+    pub fn marches_checkerboard(&self) -> bool {
+        self.technique == AoTechnique::RayMarch
+            && self.temporal.enabled
+            && self.ray_march.checkerboard
+    }
+
     /// The radius actually used: non-finite or non-positive values fall back to the default.
     pub fn effective_radius(&self) -> f32 {
         if self.radius.is_finite() && self.radius > 0.0 {

@@ -21,7 +21,9 @@ use super::{
 /// The ray march counts what ground truth counts (cosine-weighted rays that hit within R), so
 /// its average over frames converges to the ground truth the ND-buffer can show; a handful of
 /// rays per pixel and frame at half resolution, accumulated, cost less than Bevy's SSAO. Every
-/// level accumulates: without accumulation the noise needs the blur, whose full-resolution passes
+/// level accumulates, and marches one texel of two each frame
+/// ([`RayMarchParams::checkerboard`](crate::RayMarchParams::checkerboard)), so each texel gets
+/// its rays every other frame: without accumulation the noise needs the blur, whose full-resolution passes
 /// cost more than the whole of `High` on a CPU rasterizer (README, preset table). For a still noise pattern without
 /// motion vectors, set [`DynamicAo::temporal`] to [`AoTemporal::OFF`] and give the technique a
 /// budget that suffices in one frame.

@@ -50,6 +50,15 @@ struct Receiver {
     shade: bool,
 }
 
+// Copies the front layer's normal at `pixel` into `blur_normals` at full resolution, for a pixel
+// no receiver is made for this frame (the ray march's checkerboard skips it).
+fn copy_blur_normal(pixel: vec2<i32>) {
+    if settings.resolution_scale != 1u || any(pixel >= vec2<i32>(textureDimensions(front_depth))) {
+        return;
+    }
+    textureStore(blur_normals, pixel, vec4<f32>(textureLoad(front_normal, pixel, 0).xyz, 0.0));
+}
+
 // The receiver of `invocation`. At half resolution each invocation computes the full-resolution
 // pixel at twice its index and writes one texel of the half-size buffer.
 fn receiver(invocation: vec3<u32>) -> Receiver {

@@ -26,6 +26,16 @@
 //!   the voxel grid's steps), every frame.
 //! - **Average.** Running mean over at most [`AoTemporal::max_frames`] frames: the history keeps
 //!   its frame count, and each frame weighs 1 / count.
+//! - **Checkerboard.** The ray march by default marches one texel of two each frame
+//!   ([`crate::RayMarchParams::checkerboard`]), alternating, for about half its cost. A texel it
+//!   skipped keeps its reprojected (and, on clamp frames, clamped) history with its count
+//!   unchanged: the count is of samples, so a history of `max_frames` samples spans twice as many
+//!   frames. Where a skipped texel has no history (a disocclusion), it takes the mean of its
+//!   four neighbours on its surface, all marched this frame, counted as half a sample. The
+//!   clamp's window reads the skipped texels' values of last frame, which the march left in
+//!   place: at the default budget this kept the converged error of marching every texel, where
+//!   a window of the marched texels alone raised it by 2–16% (BENCHMARKS.md, "Half the texels
+//!   a frame").
 //! - **Reset.** The history is dropped on resize (its textures are made again), when any other
 //!   setting of the camera changes, when [`AoTemporal::reset`] is set (camera cuts), and where
 //!   the camera has no motion vectors yet.

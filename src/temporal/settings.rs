@@ -16,8 +16,8 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// none (the voxel term's keeps [`AoBlur::radius`](crate::AoBlur::radius)), and the ray march
 /// adds the fine-detail term itself, a side a frame.
 ///
-/// On by default: the default technique traces 2 rays per pixel and frame and relies on it to
-/// reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
+/// On by default: the default technique traces 2 rays per texel every other frame (its
+/// checkerboard) and relies on it to reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
 /// noise pattern without motion vectors, and give the technique a budget that suffices in one
 /// frame, with the blur on (every preset accumulates).
 ///
@@ -34,7 +34,9 @@ pub struct AoTemporal {
     pub enabled: bool,
     /// Most frames a pixel's history averages: the noise falls as 1/√frames up to this, and a
     /// change in the scene takes about this many frames to settle where the clamp does not catch
-    /// it. Valid: 1..=64. Default: [`DEFAULT_TEMPORAL_FRAMES`].
+    /// it. Under the ray march's [checkerboard](crate::RayMarchParams::checkerboard) a texel
+    /// gains a sample every other frame, and this counts samples: the history spans twice as many
+    /// frames. Valid: 1..=64. Default: [`DEFAULT_TEMPORAL_FRAMES`].
     pub max_frames: u32,
     /// Drop every pixel's history on the next frame (set it on a camera cut); the plugin sets it
     /// back to `false`. The history is also dropped when the view's size or its other settings

@@ -5,6 +5,8 @@
 // none), and clamped around this frame's values on the same plane nearby, so a
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
 // The image-space history is clamped on every other frame only (`temporal/mod.rs`, "Ghosting").
+// Under the ray march's checkerboard, a texel the march skipped this frame keeps its history
+// without a new sample (`temporal/mod.rs`, "Checkerboard").
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, linear_depth}
@@ -19,11 +21,18 @@ struct TemporalUniform {
     scale: u32,
     // 1: the history is clamped this frame (every other frame; always with PAIR).
     clamp: u32,
+    // Under the ray march's checkerboard, the view's place in its sample sequence: the march
+    // wrote texel t this frame where t.x and t.y + frame agree in parity (`march.wgsl`). 0 where
+    // every texel was written.
+    frame: u32,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> temporal: TemporalUniform;
-// This frame's occlusion, as the technique wrote it.
+// This frame's occlusion, as the technique wrote it. Under the checkerboard the texels the march
+// skipped hold last frame's values there: the clamp's window reads them as this frame's (on a
+// still view they are one frame old and as noisy), and a skipped texel's own is already in its
+// history, so it is not added again.
 @group(0) @binding(2) var current: texture_2d<f32>;
 @group(0) @binding(3) var front_depth: texture_depth_2d;
 @group(0) @binding(4) var front_normal: texture_2d<f32>;
@@ -208,6 +217,34 @@ fn mean_bounds(local: vec2<i32>, tolerance: f32) -> array<vec2<f32>, 2> {
     return array<vec2<f32>, 2>(mean - reach, mean + reach);
 }
 
+// For a texel the march skipped this frame and that has no history: the mean of this frame's
+// values of its four neighbours (all marched) on its surface, or `fallback` where none is.
+fn neighbours_mean(
+    texel: vec2<i32>,
+    dims: vec2<i32>,
+    full: vec2<i32>,
+    z: f32,
+    fallback: vec2<f32>,
+) -> vec2<f32> {
+    var sum = vec2<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0; i < 4; i++) {
+        let step = select(1, -1, (i & 1) == 1);
+        let offset = select(vec2<i32>(0, step), vec2<i32>(step, 0), i < 2);
+        let q = texel + offset;
+        if any(q < vec2<i32>(0)) || any(q >= dims) {
+            continue;
+        }
+        let d = textureLoad(front_depth, min(q * i32(temporal.scale), full - 1), 0);
+        if d <= 0.0 || abs(linear_depth(view, d) - z) > DEPTH_TOLERANCE * z {
+            continue;
+        }
+        sum += load_value(q);
+        count += 1.0;
+    }
+    return select(fallback, sum / max(count, 1.0), count > 0.0);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn accumulate(
     @builtin(global_invocation_id) id: vec3<u32>,
@@ -239,7 +276,8 @@ fn accumulate(
     let z = select(0.0, linear_depth(view, depth), depth > 0.0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     if z <= 0.0 || dot(n, n) == 0.0 {
-        store(texel, value, 0.0, 0.0, vec3<f32>(0.0));
+        // Background is open (a texel the checkerboard skipped may hold last frame's value).
+        store(texel, vec2<f32>(0.0), 0.0, 0.0, vec3<f32>(0.0));
         return;
     }
 
@@ -283,16 +321,26 @@ fn accumulate(
             weight += w;
         }
     }
+#ifdef PAIR
+    let marched = true;
+#else
+    let marched =
+        temporal.frame == 0u || (u32(texel.x) & 1u) == ((u32(texel.y) + temporal.frame) & 1u);
+#endif
     if weight < 0.01 {
-        store(texel, value, z, 1.0, n);
+        if marched {
+            store(texel, value, z, 1.0, n);
+        } else {
+            store(texel, neighbours_mean(texel, dims, full, z, value), z, 0.5, n);
+        }
         return;
     }
     let previous = history / weight;
-    var count = min(frames / weight + 1.0, temporal.max_frames);
+    var count = min(frames / weight + select(0.0, 1.0, marched), temporal.max_frames);
     let kept = clamp(previous, lo, hi);
     if any(abs(kept - previous) > vec2<f32>(cut)) {
         count = min(count, CLAMPED_FRAMES);
     }
-    let result = mix(kept, value, 1.0 / count);
+    let result = select(kept, mix(kept, value, 1.0 / count), marched);
     store(texel, result, z, count, n);
 }

@@ -16,7 +16,7 @@ use bevy::render::{
 
 use crate::memory::DynamicAoGpuMemory;
 use crate::settings::DynamicAo;
-use crate::view::{DynamicAoTextures, DynamicAoView};
+use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
 
 /// Format of a history texel: occlusion, linear depth and frame count as f32 bits, and the
 /// normal as 4 × 8-bit snorm.
@@ -29,6 +29,7 @@ pub(super) struct TemporalUniform {
     pub max_frames: f32,
     pub scale: u32,
     pub clamp: u32,
+    pub frame: u32,
 }
 
 /// A view's history of one accumulated quantity, kept across frames.
@@ -53,6 +54,10 @@ pub(crate) struct HistoryFrame<'a> {
     pub settings: &'a DynamicAo,
     /// Whether the view has motion vectors: without them the history is dropped.
     pub motion_vectors: bool,
+    /// Under the ray march's checkerboard, the view's place in its sample sequence
+    /// (`DynamicAoUniform::frame_index`), which says the texels marched this frame; 0 where every
+    /// texel is.
+    pub frame: u32,
 }
 
 impl TemporalHistory {
@@ -92,6 +97,7 @@ impl TemporalHistory {
             max_frames: frame.settings.temporal.frames() as f32,
             scale: frame.scale,
             clamp: u32::from(read == 0),
+            frame: frame.frame,
         };
         match history {
             Some(history) if history.size == frame.size => {
@@ -154,6 +160,7 @@ pub(crate) fn prepare_history(
         Option<&DynamicAoTextures>,
         Option<FrontLayer>,
         Option<&mut TemporalHistory>,
+        Option<&DynamicAoUniform>,
     )>,
     // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
     stale: Query<Entity, (With<TemporalHistory>, Without<DynamicAoView>)>,
@@ -162,13 +169,13 @@ pub(crate) fn prepare_history(
     // What last frame left; this frame's new and dropped histories count from the next.
     let bytes = views
         .iter()
-        .filter_map(|(.., history)| history.map(TemporalHistory::bytes))
+        .filter_map(|(.., history, _)| history.map(TemporalHistory::bytes))
         .sum();
     memory.report("temporal", bytes);
     for entity in &stale {
         commands.entity(entity).remove::<TemporalHistory>();
     }
-    for (entity, view, textures, prepass, history) in &mut views {
+    for (entity, view, textures, prepass, history, ao_uniform) in &mut views {
         let (true, Some(textures)) = (view.temporal, textures) else {
             if history.is_some() {
                 commands.entity(entity).remove::<TemporalHistory>();
@@ -181,6 +188,10 @@ pub(crate) fn prepare_history(
             scale: if view.half_resolution { 2 } else { 1 },
             settings: &view.settings,
             motion_vectors: prepass.is_some_and(|p| p.motion_vectors().is_some()),
+            frame: match view.checkerboard {
+                true => ao_uniform.map_or(0, |u| u.frame_index),
+                false => 0,
+            },
         };
         let history = history.map(Mut::into_inner);
         if let Some(new) = TemporalHistory::advance(history, &device, &queue, frame) {

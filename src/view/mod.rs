@@ -129,6 +129,9 @@ pub(crate) struct DynamicAoView {
     pub temporal: bool,
     /// The voxel term is accumulated over frames (see [`crate::AoTemporal`]).
     pub voxel_temporal: bool,
+    /// The ray march, accumulated, marches one texel of two each frame
+    /// ([`crate::RayMarchParams::checkerboard`]).
+    pub checkerboard: bool,
     /// The far-field terms that take part, by [`FarTerm`].
     far_terms: [bool; FarTerm::COUNT],
 }

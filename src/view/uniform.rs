@@ -53,6 +53,9 @@ pub(crate) struct DynamicAoUniform {
     /// How far behind the back-face layer a step of the ray march still counts as blocked,
     /// metres ([`crate::RayMarchParams::thickness`] × the image-space radius).
     pub ray_march_thickness: f32,
+    /// 1 when the ray march marches one texel of two each frame
+    /// ([`crate::RayMarchParams::checkerboard`]).
+    pub ray_march_checkerboard: u32,
     /// 1 at full resolution, 2 at half resolution.
     pub resolution_scale: u32,
     /// Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 where they
@@ -179,6 +182,7 @@ pub(super) fn extract_views(
             true => (detail_reach, 0),
             false => (0, detail_reach),
         };
+        let checkerboard = ao.marches_checkerboard();
         let back_normals = near_field && params.back_layer;
         let back_layer = back_normals || ao.technique == AoTechnique::RayMarch;
         entity_commands.insert((
@@ -191,6 +195,7 @@ pub(super) fn extract_views(
                 far_half_resolution: ao.half_resolution,
                 temporal,
                 voxel_temporal,
+                checkerboard,
                 far_terms,
             },
             FarFieldOutputs::default(),
@@ -217,6 +222,7 @@ pub(super) fn extract_views(
                 ray_march_elevations: rays.elevations,
                 ray_march_steps: rays.steps,
                 ray_march_thickness: rays.thickness * near_radius,
+                ray_march_checkerboard: u32::from(checkerboard),
                 resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 far_resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),

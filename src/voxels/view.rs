@@ -114,6 +114,7 @@ pub(crate) fn prepare_voxel_textures(
                 motion_vectors: prepass
                     .as_ref()
                     .is_some_and(|p| p.motion_vectors().is_some()),
+                frame: 0,
             };
             let history = history.map(|h| &mut h.into_inner().0);
             if let Some(new) = TemporalHistory::advance(history, &render_device, &queue, frame) {

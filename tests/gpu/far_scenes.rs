@@ -319,9 +319,10 @@ impl FarRun {
             FarTerm::select(far, ao);
         });
         self.settle();
-        // Accumulated occlusion is read once converged.
+        // Accumulated occlusion is read once converged (the ray march's checkerboard adds a
+        // sample to a texel every other frame).
         self.gpu.frame(if near && image_space.temporal.enabled {
-            30
+            60
         } else {
             4
         })

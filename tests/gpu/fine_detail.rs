@@ -382,6 +382,12 @@ fn the_ray_marchs_fine_detail_term_takes_a_side_a_frame() {
                     detail_reach,
                     ..default()
                 },
+                // Every pixel marched every frame: under the checkerboard a skipped pixel shows
+                // last frame's side.
+                ray_march: RayMarchParams {
+                    checkerboard: false,
+                    ..default()
+                },
                 ..DynamicAo::default()
             }
             .with_radius(BEVY_SSAO_RADIUS)

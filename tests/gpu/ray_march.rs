@@ -130,7 +130,7 @@ fn the_ray_march_works_on_an_orthographic_camera() {
                 let camera = gpu.camera;
                 gpu.app.world_mut().entity_mut(camera).insert(projection);
             }
-            let frame = gpu.frame(24);
+            let frame = gpu.frame(48);
             let truth = frame.ground_truth(&scene.bvh(), radius);
             errors.push(rmse(
                 &frame.visibility,
@@ -172,10 +172,12 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
     };
     // Each scene with the most its RMSE may be, as a share of its RMSE at thickness 0: 8 × 4
     // rays in one frame, and the default converged. Measured: 0.60 / 0.63, 1.04 / 0.90,
-    // 0.99 / 0.96, 0.98 / 0.89, 0.75 / 0.77.
+    // 0.99 / 0.96, 0.98 / 0.89, 0.75 / 0.77; with the checkerboard, cube on plane's default
+    // 0.96 (0.0130 against 0.0135: on its open floor the thickness changes little, and the
+    // two converged images differ by their noise as much).
     let scenes = [
         ("shells on floor", scenes::shells_on_floor(), 0.62, 0.65),
-        ("cube on plane", scenes::cube_on_plane(), 1.05, 0.92),
+        ("cube on plane", scenes::cube_on_plane(), 1.05, 0.97),
         ("room corner", scenes::room_corner(), 1.0, 0.98),
         ("ball near wall", scenes::ball_near_wall(), 1.0, 0.91),
         ("open room", scenes::open_room(), 0.77, 0.79),
@@ -204,9 +206,9 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
                     ..RayMarchParams::default()
                 })
         });
-        let default_as_air = rmse_of(&gpu.frame(24));
+        let default_as_air = rmse_of(&gpu.frame(48));
         gpu.set_ao(|ao| *ao = DynamicAo::default().with_radius(radius));
-        let default = rmse_of(&gpu.frame(24));
+        let default = rmse_of(&gpu.frame(48));
         println!(
             "{name}: 8 × 4 rays RMSE {air:.4} with thickness 0, {solid:.4} with the default \
              (GPU − CPU mean {mean:.5}, 99th percentile {p99:.3}); the default converged \
@@ -247,12 +249,14 @@ fn the_thickness_holds_with_every_mesh_an_occluder() {
     // 1.11×, and CesiumMan 0.84×, 0.85× and 0.95×, 0.98×: clamping every other frame took the
     // walker's thickness 0 from 0.0258 to 0.0248 at 0.75 m and its default from 0.0264 to
     // 0.0276 (the clamp's pull toward the window's mean, a blur, likely softened the
-    // thickness's excess between the limbs).
+    // thickness's excess between the limbs). With the checkerboard: the walker 0.98×, 0.81× and
+    // 1.07×, 1.08×; DamagedHelmet 0.88×, 0.92× and 0.95×, 0.94×; CesiumMan 0.84×, 0.85× and
+    // 0.91×, 0.99×; the Cornell box 0.70×, 0.73× and 0.73×, 0.91×.
     let bounds = [
         ("walker on floor", 1.12, 1.19),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
-        ("DamagedHelmet on floor", 0.93, 0.95),
+        ("DamagedHelmet on floor", 0.93, 0.96),
         ("CesiumMan on floor", 0.87, 1.0),
         ("CornellBox on floor", 0.75, 0.92),
     ];

@@ -83,7 +83,7 @@ fn msaa_camera_gets_the_ao_of_a_plain_camera() {
         ..DynamicAo::default()
     };
 
-    let frames = 2 * ao.temporal.frames();
+    let frames = 2 * ao.history_frames();
     let (plain, _) = capture(&scene, ao.clone(), Msaa::Off, frames);
     let (msaa, lit) = capture(&scene, ao.clone(), Msaa::Sample4, frames);
     let none = DynamicAo {
@@ -305,7 +305,7 @@ fn grille_material(world: &mut World, masked: bool) -> Handle<StandardMaterial> 
 fn msaa_sees_through_an_alpha_masked_grille() {
     let scene = scenes::room_corner();
     let ao = DynamicAo::default();
-    let frames = 2 * ao.temporal.frames();
+    let frames = 2 * ao.history_frames();
     let mut gpu = Gpu::new(&scene, ao);
     let camera = gpu.camera;
     let without = gpu.frame(frames);
