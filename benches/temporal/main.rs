@@ -62,6 +62,16 @@ fn configurations() -> Vec<Configuration> {
             ..ours("ours, default, with Bevy's TAA", DynamicAo::default())
         },
         ours(
+            "ours, default marching every texel every frame",
+            DynamicAo {
+                ray_march: RayMarchParams {
+                    checkerboard: false,
+                    ..default()
+                },
+                ..default()
+            },
+        ),
+        ours(
             "ours, default with accumulation off",
             DynamicAo {
                 temporal: AoTemporal::OFF,
