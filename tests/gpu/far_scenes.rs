@@ -15,7 +15,7 @@ use bevy_dynamic_ao::reference::{
 use bevy_dynamic_ao::spheres::OccluderSphere;
 
 use crate::far_terms::{self, FarTerm};
-use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, plain_ao};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, converged_frames, plain_ao};
 use crate::{models, scenes};
 
 /// A model file to stand on the floor: file (relative to the asset folder), animation, time
@@ -319,10 +319,9 @@ impl FarRun {
             FarTerm::select(far, ao);
         });
         self.settle();
-        // Accumulated occlusion is read once converged (the ray march's checkerboard adds a
-        // sample to a texel every other frame).
-        self.gpu.frame(if near && image_space.temporal.enabled {
-            60
+        // Accumulated occlusion is read once converged.
+        self.gpu.frame(if near {
+            converged_frames(&image_space)
         } else {
             4
         })

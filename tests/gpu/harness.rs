@@ -502,6 +502,13 @@ pub fn index(x: u32, y: u32) -> usize {
     (y * WIDTH + x) as usize
 }
 
+/// Frames after which an accumulated capture with `ao` counts as converged: twice the frames its
+/// history takes to fill ([`DynamicAo::history_frames`]), and at least 4 where it does not
+/// accumulate.
+pub fn converged_frames(ao: &DynamicAo) -> u32 {
+    (2 * ao.history_frames()).max(4)
+}
+
 /// The settings these tests were written for: the near field at full resolution, each frame on
 /// its own (no accumulation), the ray march at its single-frame reference budget. The crate's
 /// default (the accumulated ray march at half resolution) has tests of its own.

@@ -10,13 +10,13 @@ use bevy_dynamic_ao::reference::metrics::{high_frequency_error, rmse};
 
 use crate::far_scenes::{self, FarRun};
 use crate::far_terms::FarTerm;
-use crate::harness::{Frame, Gpu, HEIGHT, WIDTH};
+use crate::harness::{self, Frame, Gpu, HEIGHT, WIDTH};
 use crate::near_field::BEVY_SSAO_RADIUS;
 use crate::scenes;
 
 /// Frames a capture counts as converged: twice the frames the default history spans.
 fn converged_frames() -> u32 {
-    2 * DynamicAo::default().history_frames()
+    harness::converged_frames(&DynamicAo::default())
 }
 /// A preset has converged once its RMSE is within this share of the converged one.
 const WITHIN: f32 = 1.1;

@@ -8,7 +8,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, near_field_occlusion},
 };
 
-use crate::harness::{Frame, Gpu, difference_stats, plain_ao};
+use crate::harness::{Frame, Gpu, converged_frames, difference_stats, plain_ao};
 use crate::scenes;
 
 /// The near field with few samples and no blur: the noise accumulation has to remove.
@@ -186,19 +186,23 @@ fn the_checkerboard_converges_to_the_error_of_marching_every_texel() {
                 checkerboard: false,
                 ..RayMarchParams::default()
             });
+        let full_frames = converged_frames(&every_texel);
         let mut gpu = Gpu::new(&scene, every_texel);
-        let full = gpu.frame(32);
+        let full = gpu.frame(full_frames);
         let truth = full.ground_truth(&bvh, BEVY_SSAO_RADIUS);
         let mask = full.geometry_mask();
         gpu.set_ao(|ao| *ao = DynamicAo::default().with_radius(BEVY_SSAO_RADIUS));
-        let checkerboard = gpu.frame(64);
+        let checkerboard = gpu.frame(converged_frames(&DynamicAo::default()));
         let errors = (
             rmse(&full.visibility, &truth, Some(&mask)),
             rmse(&checkerboard.visibility, &truth, Some(&mask)),
         );
         println!(
-            "{name}: RMSE marching every texel (32 frames) {:.4}, the checkerboard (64 frames) {:.4}",
-            errors.0, errors.1
+            "{name}: RMSE marching every texel ({full_frames} frames) {:.4}, the checkerboard \
+             ({} frames) {:.4}",
+            errors.0,
+            converged_frames(&DynamicAo::default()),
+            errors.1
         );
         // ao_capture on the project's scenes and on third-party models read within 3%.
         assert!(
@@ -328,8 +332,8 @@ fn accumulation_works_with_bevys_temporal_anti_aliasing() {
         let bvh = scene.bvh();
         let ao = DynamicAo::default().with_radius(BEVY_SSAO_RADIUS);
         let mut gpu = Gpu::new(&scene, ao.clone());
-        // Twice the frames the default's history spans under its checkerboard.
-        let plain = gpu.frame(64);
+        let frames = converged_frames(&ao);
+        let plain = gpu.frame(frames);
         let truth = plain.ground_truth(&bvh, BEVY_SSAO_RADIUS);
         let mask = plain.geometry_mask();
         let lit = |colors: &[Vec3]| colors.iter().map(|c| c.element_sum()).sum::<f32>();
@@ -342,7 +346,7 @@ fn accumulation_works_with_bevys_temporal_anti_aliasing() {
             .world_mut()
             .entity_mut(gpu.camera)
             .insert(TemporalAntiAliasing::default());
-        let with_taa = gpu.frame(64);
+        let with_taa = gpu.frame(frames);
         let taa_lit = lit(&gpu.color(1));
         let errors = (
             rmse(&plain.visibility, &truth, Some(&mask)),

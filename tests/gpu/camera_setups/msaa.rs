@@ -7,7 +7,7 @@ use bevy_dynamic_ao::prelude::*;
 use super::{masked_rmse, rmse};
 use crate::far_scenes::{self, FarRun};
 use crate::far_terms::FarTerm;
-use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, plain_ao};
+use crate::harness::{Frame, Gpu, HEIGHT, SceneSpec, WIDTH, converged_frames, plain_ao};
 use crate::log_capture::{assert_logged_once, logged};
 use crate::models::shared_assets;
 use crate::scenes;
@@ -83,7 +83,7 @@ fn msaa_camera_gets_the_ao_of_a_plain_camera() {
         ..DynamicAo::default()
     };
 
-    let frames = 2 * ao.history_frames();
+    let frames = converged_frames(&ao);
     let (plain, _) = capture(&scene, ao.clone(), Msaa::Off, frames);
     let (msaa, lit) = capture(&scene, ao.clone(), Msaa::Sample4, frames);
     let none = DynamicAo {
@@ -305,7 +305,7 @@ fn grille_material(world: &mut World, masked: bool) -> Handle<StandardMaterial> 
 fn msaa_sees_through_an_alpha_masked_grille() {
     let scene = scenes::room_corner();
     let ao = DynamicAo::default();
-    let frames = 2 * ao.history_frames();
+    let frames = converged_frames(&ao);
     let mut gpu = Gpu::new(&scene, ao);
     let camera = gpu.camera;
     let without = gpu.frame(frames);
