@@ -13,7 +13,7 @@ use bevy::render::{
 use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
-use crate::dispatch::{ComputeStep, record_passes};
+use crate::dispatch::{ComputeStep, Workgroup, record_passes};
 use crate::view::{DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
 
 pub(crate) fn compose_pass(
@@ -50,6 +50,7 @@ pub(crate) fn compose_pass(
         bind_group: &bind_group.0,
         offsets: &[settings_index.index(), view_offset.offset],
         texels: size,
+        workgroup: Workgroup::Square,
     };
     record_passes(&mut ctx, "dynamic_ao_compose", true, &[step]);
 }

@@ -12,7 +12,7 @@ use bevy::render::{
 use super::bind_groups::{BlurBindGroups, UpsampleBindGroup, VisibilityBindGroup};
 use super::pipeline::BlurPipelines;
 use crate::compose::AoPassesReady;
-use crate::dispatch::{ComputeStep, record_passes};
+use crate::dispatch::{ComputeStep, Workgroup, record_passes};
 use crate::view::DynamicAoUniform;
 
 /// The pipeline and bind group of a view's last filter pass: `own`, or once our passes write
@@ -70,6 +70,7 @@ pub(crate) fn blur_pass(
         bind_group,
         offsets: &offsets,
         texels: size,
+        workgroup: Workgroup::Square,
     });
     record_passes(&mut ctx, "dynamic_ao_blur", true, &steps);
 }
@@ -119,6 +120,7 @@ pub(crate) fn upsample_pass(
         offsets: &[view_offset.offset, settings_index.index()],
         // One invocation per 2 × 2 pixels (`upsample.wgsl`).
         texels: (size + 1) / 2,
+        workgroup: Workgroup::Row,
     };
     record_passes(&mut ctx, "dynamic_ao_upsample", true, &[step]);
 }

@@ -181,28 +181,32 @@ fn blend_sum(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec3<f32> {
     return sum;
 }
 
-// `blend` once the pixel's surface is known: position `p`, unit normal `n`, and that normal as
-// `normal_texture` encodes it.
-fn blend_at(x: vec2<i32>, quad: u32, p: vec3<f32>, n: vec3<f32>, encoded: vec3<f32>, w: Window) {
+// The blended channels of quad pixel `quad` (`blend_sum`) at position `p` with unit normal `n`,
+// or the quad's own texel's where no texel of the window lies on its surface.
+fn blended(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec2<f32> {
     let sum = blend_sum(quad, p, n, w);
-    store(x, select(w.oo.value, sum.xy / sum.z, sum.z > 0.0), encoded);
+    return select(w.oo.value, sum.xy / sum.z, sum.z > 0.0);
 }
 
-// Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`.
+// Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`. One store
+// whatever the pixel: lavapipe runs every branch under a mask, so a store in each branch costs
+// every pixel (BENCHMARKS.md, "One store a pass").
 fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     if any(x >= dims) {
         return;
     }
-    if depth <= 0.0 {
-        store(x, vec2<f32>(0.0), vec3<f32>(0.0));
-        return;
+    var value = vec2<f32>(0.0);
+    var encoded = vec3<f32>(0.0);
+    if depth > 0.0 {
+        encoded = textureLoad(normal_texture, x, 0).xyz;
+        value = blended(quad, pixel_position(x, dims, depth), decode_normal(encoded), w);
     }
-    let p = pixel_position(x, dims, depth);
-    let encoded = textureLoad(normal_texture, x, 0).xyz;
-    blend_at(x, quad, p, decode_normal(encoded), encoded, w);
+    store(x, value, encoded);
 }
 
-@compute @workgroup_size(8, 8, 1)
+// Rows of quads (`dispatch::Workgroup::Row`): on lavapipe most texels a quad reads are then in the
+// cache from the quads before it in its row.
+@compute @workgroup_size(64, 1, 1)
 fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
     let dims = vec2<i32>(textureDimensions(depth_texture));
     let low_dims = vec2<i32>(textureDimensions(low));
@@ -221,17 +225,16 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
         texel(l + vec2<i32>(0, 1), low_dims),
         texel(l + vec2<i32>(1, 1), low_dims),
     );
+    var value = vec2<f32>(0.0);
+    var encoded = vec3<f32>(0.0);
     if w.oo.guide.on_surface {
 #ifdef WRITE_NORMALS
         // The guide's own normal may be the history's 8-bit one; the blur gets the layer's.
-        let encoded = textureLoad(normal_texture, x, 0).xyz;
-#else
-        let encoded = vec3<f32>(0.0);
+        encoded = textureLoad(normal_texture, x, 0).xyz;
 #endif
-        blend_at(x, 0u, w.oo.guide.p, w.oo.guide.n, encoded, w);
-    } else {
-        store(x, vec2<f32>(0.0), vec3<f32>(0.0));
+        value = blended(0u, w.oo.guide.p, w.oo.guide.n, w);
     }
+    store(x, value, encoded);
     let x1 = x + vec2<i32>(1, 0);
     blend(x1, 1u, dims, textureLoad(depth_texture, min(x1, dims - 1), 0), w);
     let x2 = x + vec2<i32>(0, 1);

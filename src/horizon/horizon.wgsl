@@ -6,8 +6,8 @@
 // `reference::horizon` is the CPU twin; keep the two in step.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
-    view_position, view_position_at,
+    view, settings, front_depth, front_normal, back_depth, back_normal, receiver, Receiver,
+    store_occlusion, view_position, view_position_at,
 }
 #import bevy_dynamic_ao::nd_buffer::pixel_world_size
 #import bevy_dynamic_ao::sampling::{pcg_hash, HASH_TO_UNIT, frame_offset, pixel_pattern}
@@ -34,9 +34,15 @@ fn tangent_along(pixel: vec2<i32>, size: vec2<f32>, dir: vec2<f32>, p: vec3<f32>
 @compute @workgroup_size(8, 8, 1)
 fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let r = receiver(invocation);
-    if !r.shade {
-        return;
+    var value = 0.0;
+    if r.shade {
+        value = horizon_occlusion(r);
     }
+    store_occlusion(r, value);
+}
+
+// Horizon-based occlusion at receiver `r`, which has a surface.
+fn horizon_occlusion(r: Receiver) -> f32 {
     let pixel = r.pixel;
     let size = r.size;
     let dims = vec2<i32>(size);
@@ -109,6 +115,5 @@ fn horizon(@builtin(global_invocation_id) invocation: vec3<u32>) {
         }
         sum += ao;
     }
-    let value = settings.horizon_contrast * settings.intensity * sum / f32(directions);
-    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    return settings.horizon_contrast * settings.intensity * sum / f32(directions);
 }

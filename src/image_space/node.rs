@@ -9,7 +9,7 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use crate::dispatch::{ComputeStep, record_passes};
+use crate::dispatch::{ComputeStep, Workgroup, record_passes};
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
@@ -54,6 +54,7 @@ pub(super) fn image_space_pass(
         bind_group: &bind_group.0,
         offsets: &[view_offset.offset, settings_index.index()],
         texels,
+        workgroup: Workgroup::Square,
     };
     record_passes(&mut ctx, label, true, &[step]);
 }

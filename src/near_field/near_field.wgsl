@@ -2,7 +2,8 @@
 // `reference::near_field` evaluates the same steps on the CPU; keep the two in step.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
+    view, settings, front_depth, front_normal, back_depth, back_normal, receiver, Receiver,
+    store_occlusion,
 }
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, view_depth, pixel_world_size}
 #import bevy_dynamic_ao::math::{PI, TAU}
@@ -46,9 +47,15 @@ fn occluder(
 @compute @workgroup_size(8, 8, 1)
 fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
     let r = receiver(invocation);
-    if !r.shade {
-        return;
+    var value = 0.0;
+    if r.shade {
+        value = near_field_occlusion(r);
     }
+    store_occlusion(r, value);
+}
+
+// The near field's occlusion at receiver `r`, which has a surface.
+fn near_field_occlusion(r: Receiver) -> f32 {
     let pixel = r.pixel;
     let size = r.size;
     let n = r.normal;
@@ -88,5 +95,5 @@ fn near_field(@builtin(global_invocation_id) invocation: vec3<u32>) {
         }
         open *= sample_open;
     }
-    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp((1.0 - open) * settings.intensity, 0.0, 1.0)));
+    return (1.0 - open) * settings.intensity;
 }

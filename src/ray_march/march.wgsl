@@ -2,8 +2,8 @@
 // "Ray-Marched Ambient Occlusion"). `reference::ray_march` is the CPU twin.
 
 #import bevy_dynamic_ao::image_space_bindings::{
-    view, settings, front_depth, front_normal, back_depth, back_normal, occlusion, receiver,
-    copy_blur_normal,
+    view, settings, front_depth, front_normal, back_depth, back_normal, receiver, Receiver,
+    store_occlusion, copy_blur_normal,
 }
 #import bevy_render::view::ndc_to_uv
 #import bevy_dynamic_ao::nd_buffer::{linear_depth, pixel_world_size}
@@ -44,6 +44,7 @@ fn blocked(
         return 0;
     }
     let back = textureLoad(back_depth, q, 0);
+    let front_z = -linear_depth(view, front);
     if back > 0.0 {
         if ndc.z > back {
             return 1;
@@ -57,11 +58,9 @@ fn blocked(
         }
         // A wall of one polygon has its back face where its front is: no step lands between
         // them, so a ray through it shows only as a step in front and the next one behind.
-        let front_z = -linear_depth(view, front);
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }
-    let front_z = -linear_depth(view, front);
     return select(0, 1, front_z - z < radius);
 }
 
@@ -96,9 +95,16 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
         copy_blur_normal(vec2<i32>(i32(texel.x ^ 1u), i32(texel.y)));
     }
     let r = receiver(texel);
-    if !r.shade {
-        return;
+    var value = 0.0;
+    if r.shade {
+        value = march(r, sequence);
     }
+    store_occlusion(r, value);
+}
+
+// The rays' occlusion at receiver `r`, which has a surface, and under accumulation its fine-detail
+// term's; `sequence` is the receiver's place in its sample sequence.
+fn march(r: Receiver, sequence: u32) -> f32 {
     // The march works in view space.
     let p = r.view_position;
     let n = r.view_normal;
@@ -154,5 +160,5 @@ fn ray_march(@builtin(global_invocation_id) invocation: vec3<u32>) {
             fine_detail(view, front_depth, r.pixel, r.depth, r.normal, reach, radius, side, 1);
         value = with_fine_detail(value, detail, settings.intensity);
     }
-    textureStore(occlusion, r.out_pixel, vec4<f32>(clamp(value, 0.0, 1.0)));
+    return value;
 }

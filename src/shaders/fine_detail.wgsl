@@ -35,12 +35,14 @@ fn fine_detail(
     let p = position_in_view(view, (vec2<f32>(pixel) + 0.5) / size, depth_here);
     let footprint = pixel_world_size(view, -p.z, size.y);
     let reach_world = min((f32(reach) + 0.5) * footprint, radius);
-    let sides = array<vec2<i32>, 4>(vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1));
     var occlusion = 0.0;
     for (var side = first_side; side < first_side + side_count; side++) {
+        // The side's direction without an array: CPU rasterizers spill arrays indexed at run
+        // time to memory.
+        let along = select(vec2<i32>(0, 1), vec2<i32>(1, 0), side < 2) * (1 - 2 * (side & 1));
         var highest = 0.0;
         for (var k = 1; k <= reach; k++) {
-            let q = pixel + sides[side] * k;
+            let q = pixel + along * k;
             if any(q < vec2<i32>(0)) || any(q >= dims) {
                 break;
             }

@@ -45,8 +45,8 @@ struct Receiver {
     // The same surface in view space: its position and unit normal.
     view_position: vec3<f32>,
     view_normal: vec3<f32>,
-    // False where there is nothing to shade: outside the image, or background (already written
-    // as open).
+    // False where there is nothing to shade: outside the image, or background (written as open
+    // by `store_occlusion`).
     shade: bool,
 }
 
@@ -79,11 +79,19 @@ fn receiver(invocation: vec3<u32>) -> Receiver {
     }
     r.normal = decode_normal(encoded);
     if r.depth <= 0.0 || dot(r.normal, r.normal) == 0.0 {
-        textureStore(occlusion, r.out_pixel, vec4<f32>(0.0));
         return r;
     }
     r.view_position = view_position(r.pixel, r.size, r.depth);
     r.view_normal = normalize((view.view_from_world * vec4<f32>(r.normal, 0.0)).xyz);
     r.shade = true;
     return r;
+}
+
+// Writes receiver `r`'s occlusion `value`, clamped to [0, 1], or open where it shades nothing.
+// Each technique stores through this once, after its branches: lavapipe runs every branch under
+// a mask, so a store in each would cost every invocation (BENCHMARKS.md, "One store a pass").
+fn store_occlusion(r: Receiver, value: f32) {
+    if all(r.out_pixel < vec2<i32>(textureDimensions(occlusion))) {
+        textureStore(occlusion, r.out_pixel, vec4<f32>(select(0.0, clamp(value, 0.0, 1.0), r.shade)));
+    }
 }

@@ -10,7 +10,7 @@ use bevy::render::{
 };
 
 use super::pipeline::{Channels, TemporalBindGroup, TemporalPipeline};
-use crate::dispatch::{ComputeStep, record_passes};
+use crate::dispatch::{ComputeStep, Workgroup, record_passes};
 use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
 
 pub(crate) fn temporal_pass(
@@ -38,6 +38,7 @@ pub(crate) fn temporal_pass(
         bind_group: &bind_group.0,
         offsets: &[view_offset.offset],
         texels: UVec2::new(size.width, size.height),
+        workgroup: Workgroup::Row,
     };
     record_passes(&mut ctx, "dynamic_ao_temporal", true, &[step]);
 }

@@ -93,8 +93,12 @@ fn load_value(texel: vec2<i32>) -> vec2<f32> {
 #endif
 }
 
-// Texels along each side of a workgroup's tile: its 8 × 8 texels and the window around them.
-const TILE: i32 = 8 + 2 * WINDOW;
+// A workgroup's texels along x and y (`@workgroup_size`), and along each side of its tile: its
+// texels and the window around them.
+const GROUP_X: i32 = 64;
+const GROUP_Y: i32 = 1;
+const TILE_X: i32 = GROUP_X + 2 * WINDOW;
+const TILE_Y: i32 = GROUP_Y + 2 * WINDOW;
 // Each texel of a workgroup's tile, read once: the 5 × 5 windows of its 64 texels overlap, and
 // reading depth and value for each of the 25 taps was most of the pass. Two half floats per
 // texel in one u32, because on lavapipe a read from workgroup memory costs about what a texture
@@ -105,7 +109,7 @@ const TILE: i32 = 8 + 2 * WINDOW;
 // without normals: they were two more channels and a decoding per tap, and the plane test has a
 // converged error no higher than theirs (BENCHMARKS.md, "The clamp window tests depth against a
 // plane").
-var<workgroup> tile: array<u32, TILE * TILE>;
+var<workgroup> tile: array<u32, TILE_X * TILE_Y>;
 
 // Tile texel `i`, unpacked. Half floats keep 11 bits: a depth off by 0.05% against a plane
 // tolerance of 2%.
@@ -116,8 +120,8 @@ fn tile_at(i: i32) -> vec2<f32> {
 // Fills the tile of the workgroup whose first texel is `corner`: tile texel t holds texel
 // `corner - WINDOW + t`, clamped to the texture as the window's reads were.
 fn load_tile(corner: vec2<i32>, lane: i32, dims: vec2<i32>, full: vec2<i32>) {
-    for (var i = lane; i < TILE * TILE; i += 64) {
-        let q = clamp(corner - WINDOW + vec2<i32>(i % TILE, i / TILE), vec2<i32>(0), dims - 1);
+    for (var i = lane; i < TILE_X * TILE_Y; i += GROUP_X * GROUP_Y) {
+        let q = clamp(corner - WINDOW + vec2<i32>(i % TILE_X, i / TILE_X), vec2<i32>(0), dims - 1);
 #ifdef PAIR
         tile[i] = pack2x16float(load_value(q));
 #else
@@ -130,7 +134,7 @@ fn load_tile(corner: vec2<i32>, lane: i32, dims: vec2<i32>, full: vec2<i32>) {
 // The tile's index of the texel `offset` away from the workgroup's texel `local`.
 fn tile_index(local: vec2<i32>, offset: vec2<i32>) -> i32 {
     let t = local + WINDOW + offset;
-    return t.x + t.y * TILE;
+    return t.x + t.y * TILE_X;
 }
 
 fn pack_value(value: vec2<f32>) -> u32 {
@@ -245,7 +249,8 @@ fn neighbours_mean(
     return select(fallback, sum / max(count, 1.0), count > 0.0);
 }
 
-@compute @workgroup_size(8, 8, 1)
+// `dispatch::Workgroup::Row`, which GROUP_X and GROUP_Y state as well.
+@compute @workgroup_size(64, 1, 1)
 fn accumulate(
     @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(local_invocation_id) local_id: vec3<u32>,
@@ -275,11 +280,9 @@ fn accumulate(
     let depth = textureLoad(front_depth, pixel, 0);
     let z = select(0.0, linear_depth(view, depth), depth > 0.0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
-    if z <= 0.0 || dot(n, n) == 0.0 {
-        // Background is open (a texel the checkerboard skipped may hold last frame's value).
-        store(texel, vec2<f32>(0.0), 0.0, 0.0, vec3<f32>(0.0));
-        return;
-    }
+    // One store at the end, whatever the path: lavapipe runs every branch under a mask, so each
+    // store written in a branch costs every texel (BENCHMARKS.md, "One store a pass").
+    let surface = z > 0.0 && dot(n, n) != 0.0;
 
 #ifdef PAIR
     let bounds = range_bounds(local, value);
@@ -297,7 +300,7 @@ fn accumulate(
     var history = vec2<f32>(0.0);
     var frames = 0.0;
     var weight = 0.0;
-    if temporal.reset == 0u {
+    if temporal.reset == 0u && surface {
         let motion = textureLoad(motion_vectors, pixel, 0).xy;
         // History texel t holds the surface at full-resolution pixel t × scale, so a place in
         // the last frame maps back through that scale (at half resolution, a texel's centre is
@@ -327,20 +330,25 @@ fn accumulate(
     let marched =
         temporal.frame == 0u || (u32(texel.x) & 1u) == ((u32(texel.y) + temporal.frame) & 1u);
 #endif
-    if weight < 0.01 {
-        if marched {
-            store(texel, value, z, 1.0, n);
-        } else {
-            store(texel, neighbours_mean(texel, dims, full, z, value), z, 0.5, n);
+    var result = value;
+    var count = 1.0;
+    if !surface {
+        // Background is open (a texel the checkerboard skipped may hold last frame's value).
+        result = vec2<f32>(0.0);
+        count = 0.0;
+    } else if weight < 0.01 {
+        if !marched {
+            result = neighbours_mean(texel, dims, full, z, value);
+            count = 0.5;
         }
-        return;
+    } else {
+        let previous = history / weight;
+        count = min(frames / weight + select(0.0, 1.0, marched), temporal.max_frames);
+        let kept = clamp(previous, lo, hi);
+        if any(abs(kept - previous) > vec2<f32>(cut)) {
+            count = min(count, CLAMPED_FRAMES);
+        }
+        result = select(kept, mix(kept, value, 1.0 / count), marched);
     }
-    let previous = history / weight;
-    var count = min(frames / weight + select(0.0, 1.0, marched), temporal.max_frames);
-    let kept = clamp(previous, lo, hi);
-    if any(abs(kept - previous) > vec2<f32>(cut)) {
-        count = min(count, CLAMPED_FRAMES);
-    }
-    let result = select(kept, mix(kept, value, 1.0 / count), marched);
-    store(texel, result, z, count, n);
+    store(texel, result, select(0.0, z, surface), count, select(vec3<f32>(0.0), n, surface));
 }

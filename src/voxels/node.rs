@@ -13,7 +13,7 @@ use bevy::render::{
 
 use super::buffers::VoxelBuffers;
 use super::pipeline::{VoxelBindGroups, VoxelPipelines};
-use crate::dispatch::{ComputeStep, record_passes};
+use crate::dispatch::{ComputeStep, Workgroup, record_passes};
 use crate::filter::BlurPipelines;
 use crate::temporal::{Channels, TemporalPipeline};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, PendingPasses};
@@ -97,6 +97,7 @@ pub(crate) fn voxel_pass(
         bind_group: &bind_groups.sample,
         offsets: &offsets,
         texels: (size + 1) / 2,
+        workgroup: Workgroup::Square,
     };
     record_passes(&mut ctx, "dynamic_ao_voxel_ao", false, &[sample_step]);
 
@@ -110,6 +111,7 @@ pub(crate) fn voxel_pass(
             bind_group,
             offsets: &offsets[..1],
             texels: (size + 1) / 2,
+            workgroup: Workgroup::Row,
         };
         record_passes(&mut ctx, "dynamic_ao_voxel_temporal", false, &[step]);
     }
@@ -120,20 +122,36 @@ pub(crate) fn voxel_pass(
         upsample,
         &bind_groups.upsample,
         (size + 1) / 2,
+        Workgroup::Row,
     )];
     if let Some(groups) = &bind_groups.blur {
-        passes.push(("dynamic_ao_voxel_blur_x", blur_x, &groups.x, size));
-        passes.push(("dynamic_ao_voxel_blur_y", blur_y, &groups.y, size));
+        passes.push((
+            "dynamic_ao_voxel_blur_x",
+            blur_x,
+            &groups.x,
+            size,
+            Workgroup::Square,
+        ));
+        passes.push((
+            "dynamic_ao_voxel_blur_y",
+            blur_y,
+            &groups.y,
+            size,
+            Workgroup::Square,
+        ));
     }
     let steps: Vec<ComputeStep> = passes
         .into_iter()
-        .map(|(label, pipeline, bind_group, texels)| ComputeStep {
-            label,
-            pipeline,
-            bind_group,
-            offsets: &offsets,
-            texels,
-        })
+        .map(
+            |(label, pipeline, bind_group, texels, workgroup)| ComputeStep {
+                label,
+                pipeline,
+                bind_group,
+                offsets: &offsets,
+                texels,
+                workgroup,
+            },
+        )
         .collect();
     record_passes(&mut ctx, "dynamic_ao_voxel_filter", false, &steps);
 }
