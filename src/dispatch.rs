@@ -18,7 +18,7 @@ pub(crate) enum Workgroup {
     Square,
     /// 64 × 1 invocations: passes that read each texel's neighbours in the rows around it. On
     /// lavapipe (8 lanes a row, texture reads as gathers) a workgroup that walks along rows reads
-    /// texels the previous lanes brought into the cache: the upsampling cost 15–20% less and the
+    /// texels the previous lanes brought into the cache: the upsampling cost 14–18% less and the
     /// temporal pass 13% less than in 8 × 8 workgroups (BENCHMARKS.md, "Workgroups along rows").
     Row,
 }

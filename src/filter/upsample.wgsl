@@ -190,7 +190,7 @@ fn blended(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec2<f32> {
 
 // Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`. One store
 // whatever the pixel: lavapipe runs every branch under a mask, so a store in each branch costs
-// every pixel (BENCHMARKS.md, "One store a pass").
+// every pixel (BENCHMARKS.md, "Workgroups along rows").
 fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     if any(x >= dims) {
         return;

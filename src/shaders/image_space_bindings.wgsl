@@ -89,9 +89,11 @@ fn receiver(invocation: vec3<u32>) -> Receiver {
 
 // Writes receiver `r`'s occlusion `value`, clamped to [0, 1], or open where it shades nothing.
 // Each technique stores through this once, after its branches: lavapipe runs every branch under
-// a mask, so a store in each would cost every invocation (BENCHMARKS.md, "One store a pass").
+// a mask, so a store in each would cost every invocation (BENCHMARKS.md, "Workgroups along
+// rows").
 fn store_occlusion(r: Receiver, value: f32) {
     if all(r.out_pixel < vec2<i32>(textureDimensions(occlusion))) {
-        textureStore(occlusion, r.out_pixel, vec4<f32>(select(0.0, clamp(value, 0.0, 1.0), r.shade)));
+        let stored = select(0.0, clamp(value, 0.0, 1.0), r.shade);
+        textureStore(occlusion, r.out_pixel, vec4<f32>(stored));
     }
 }

@@ -281,7 +281,7 @@ fn accumulate(
     let z = select(0.0, linear_depth(view, depth), depth > 0.0);
     let n = decode_normal(textureLoad(front_normal, pixel, 0).xyz);
     // One store at the end, whatever the path: lavapipe runs every branch under a mask, so each
-    // store written in a branch costs every texel (BENCHMARKS.md, "One store a pass").
+    // store written in a branch costs every texel (BENCHMARKS.md, "Workgroups along rows").
     let surface = z > 0.0 && dot(n, n) != 0.0;
 
 #ifdef PAIR
