@@ -5,10 +5,15 @@
 finely detailed object on a floor of zero thickness, for `ao_capture --out-truth`
 (BENCHMARKS.md, "A bumpy ring on a floor"). With `--blob`, the same floor and camera with a
 bumpy ball of 60,000 triangles (radius 0.45 m, normals from its faces) resting on the floor and a
-1.6 x 1.1 m slab 8 cm thick beside it, reaching out of the view. Standard library only.
+1.6 x 1.1 m slab 8 cm thick beside it, reaching out of the view. With `--fins`, the same floor
+and camera with a heat sink: a 0.8 x 0.5 m base 4 cm thick carrying 20 fins 8 mm thick, 0.2 m
+tall and 4 cm apart (gaps of about a pixel at 160 x 120, six at 640 x 480), and beside it a
+grille of 12 upright bars 1 cm square and 3 cm apart: detail finer than a half-resolution texel
+(BENCHMARKS.md, "Fins"). Standard library only.
 
     python3 docs/ring_on_floor.py /tmp/ring_on_floor.glb
     python3 docs/ring_on_floor.py /tmp/blob_and_slab.glb --blob
+    python3 docs/ring_on_floor.py /tmp/fins.glb --fins
 """
 import json
 import math
@@ -77,17 +82,43 @@ def blob(radius, nu, nv):
     return positions, normals, indices
 
 
-def slab(cx, cz, w, h, t):
+def slab(cx, cz, w, h, t, y0=0):
+    """A box with its base at height y0, top at h, t thick along x and w wide along z."""
     x0, x1, z0, z1 = cx - t / 2, cx + t / 2, cz - w / 2, cz + w / 2
-    faces = [((1,0,0), [(x1,0,z0),(x1,h,z0),(x1,h,z1),(x1,0,z1)]), ((-1,0,0), [(x0,0,z1),(x0,h,z1),(x0,h,z0),(x0,0,z0)]),
-             ((0,0,1), [(x0,0,z1),(x1,0,z1),(x1,h,z1),(x0,h,z1)]), ((0,0,-1), [(x1,0,z0),(x0,0,z0),(x0,h,z0),(x1,h,z0)]),
-             ((0,1,0), [(x0,h,z0),(x0,h,z1),(x1,h,z1),(x1,h,z0)]), ((0,-1,0), [(x0,0,z0),(x1,0,z0),(x1,0,z1),(x0,0,z1)])]
+    return box(x0, x1, y0, h, z0, z1)
+
+
+def box(x0, x1, y0, h, z0, z1):
+    b = y0
+    faces = [((1,0,0), [(x1,b,z0),(x1,h,z0),(x1,h,z1),(x1,b,z1)]), ((-1,0,0), [(x0,b,z1),(x0,h,z1),(x0,h,z0),(x0,b,z0)]),
+             ((0,0,1), [(x0,b,z1),(x1,b,z1),(x1,h,z1),(x0,h,z1)]), ((0,0,-1), [(x1,b,z0),(x0,b,z0),(x0,h,z0),(x1,h,z0)]),
+             ((0,1,0), [(x0,h,z0),(x0,h,z1),(x1,h,z1),(x1,h,z0)]), ((0,-1,0), [(x0,b,z0),(x1,b,z0),(x1,b,z1),(x0,b,z1)])]
     positions, normals, indices = [], [], []
     for n, quad in faces:
         k = len(positions)
         positions += quad; normals += [n] * 4
         indices += [k, k + 1, k + 2, k, k + 2, k + 3]
     return positions, normals, indices
+
+
+def joined(parts):
+    """One mesh of several (positions, normals, indices)."""
+    positions, normals, indices = [], [], []
+    for p, n, i in parts:
+        k = len(positions)
+        positions += p; normals += n
+        indices += [k + j for j in i]
+    return positions, normals, indices
+
+
+def heat_sink():
+    base = slab(0.0, 0.0, 0.5, 0.04, 0.8)
+    fins = [slab(-0.38 + 0.04 * k, 0.0, 0.5, 0.24, 0.008, 0.04) for k in range(20)]
+    return joined([base] + fins)
+
+
+def grille():
+    return joined([box(-0.75 + 0.03 * k, -0.74 + 0.03 * k, 0.0, 0.35, 0.6, 0.61) for k in range(12)])
 
 
 def look_rotation(eye, target):
@@ -104,7 +135,7 @@ def look_rotation(eye, target):
     return [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, s / 4]
 
 
-def main(path, blob_scene=False):
+def main(path, scene="ring"):
     data, views, accessors = bytearray(), [], []
 
     def add(values, fmt, kind, component, target, bounds=False):
@@ -128,14 +159,17 @@ def main(path, blob_scene=False):
         return {"primitives": [{"attributes": {"POSITION": p, "NORMAL": n}, "indices": i, "material": 0}]}
 
     floor = ([(-5, 0, -5), (5, 0, -5), (5, 0, 5), (-5, 0, 5)], [(0, 1, 0)] * 4, [0, 2, 1, 0, 3, 2])
-    eye = (2.0, 1.6, 2.4)
-    if blob_scene:
+    eye, target = (2.0, 1.6, 2.4), (0.0, 0.3, 0.0)
+    if scene == "blob":
         objects = [("blob", blob(0.45, 150, 200)), ("slab", slab(-1.15, -0.3, 1.6, 1.1, 0.08))]
+    elif scene == "fins":
+        objects = [("heat sink", heat_sink()), ("grille", grille())]
+        eye, target = (0.7, 0.8, 1.2), (-0.15, 0.1, 0.1)
     else:
         objects = [("ring", ring(0.6, 0.25, 250, 120))]
     objects.append(("floor", floor))
     nodes = [{"mesh": k, "name": name} for k, (name, _) in enumerate(objects)]
-    nodes.append({"camera": 0, "translation": list(eye), "rotation": look_rotation(eye, (0.0, 0.3, 0.0))})
+    nodes.append({"camera": 0, "translation": list(eye), "rotation": look_rotation(eye, target)})
     gltf = {
         "asset": {"version": "2.0"},
         "scene": 0,
@@ -158,5 +192,6 @@ def main(path, blob_scene=False):
 
 
 if __name__ == "__main__":
-    paths = [a for a in sys.argv[1:] if a != "--blob"]
-    main(paths[0] if paths else "ring_on_floor.glb", "--blob" in sys.argv[1:])
+    flags = [a for a in sys.argv[1:] if a in ("--blob", "--fins")]
+    paths = [a for a in sys.argv[1:] if a not in flags]
+    main(paths[0] if paths else "ring_on_floor.glb", flags[0][2:] if flags else "ring")

@@ -56,7 +56,7 @@ fn splat_bracket(pixel: vec2<i32>, dims: vec2<u32>) -> Bracket {
     // texel, which may lie on another surface) than the near field's reach. No normal weight past
     // a right angle: of the supports 2, 1 and 0.3 tried on the open room at 2 m, 1 came closest
     // to ground truth (`far_field::half_resolution_splats_stay_as_close_to_ground_truth`).
-    return bracket(view, front_depth, front_normal, pixel, p, n, low_dims, settings.image_space_radius, 1.0);
+    return bracket(view, front_depth, front_normal, pixel, p, n, low_dims, settings.image_space_radius);
 #else
     return none;
 #endif

@@ -96,7 +96,7 @@ fn pixel_position(x: vec2<i32>, dims: vec2<i32>, depth: f32) -> vec3<f32> {
 // The weight of texel `t` for a pixel at world position `p` with unit normal `n`, whose quad's
 // texel holds the summed channels `h_x`; `screen` is w_d of the texel's distance to the pixel.
 fn weight(t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
-    let w = surface_weight(t.guide, p, n, settings.image_space_radius, 2.0);
+    let w = surface_weight(t.guide, p, n, settings.image_space_radius);
     return screen * w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
 }
 

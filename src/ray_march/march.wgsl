@@ -3,10 +3,10 @@
 
 #import bevy_dynamic_ao::image_space_bindings::{
     view, settings, front_depth, front_normal, back_depth, back_normal, receiver, Receiver,
-    store_occlusion, copy_blur_normal,
+    store_occlusion, copy_blur_normal, view_position,
 }
 #import bevy_render::view::ndc_to_uv
-#import bevy_dynamic_ao::nd_buffer::{linear_depth, pixel_world_size}
+#import bevy_dynamic_ao::nd_buffer::{linear_depth, pixel_world_size, decode_normal}
 #import bevy_dynamic_ao::sampling::{pixel_pattern, frame_jitter}
 #import bevy_dynamic_ao::math::{TAU, tangent_frame}
 #import bevy_dynamic_ao::fine_detail::{fine_detail, with_fine_detail}
@@ -62,6 +62,54 @@ fn blocked(
         return select(0, 1, crossed);
     }
     return select(0, 1, front_z - z < radius);
+}
+
+// Whether the ray from view-space `origin` along unit `dir`, which was still free on screen at
+// distance `on_screen` and had left the screen at `left_at`, is blocked within `radius` by the
+// surface at the screen's edge where it left, continued as that surface's tangent plane: what
+// lies past the edge is not in the ND-buffer, and counted as open, a floor running out of the
+// view left a wall beside the edge without the floor's occlusion (a plate near the view's edge
+// read 0.23 occluded against the truth's 0.40). The plane counts only where the ray meets it off
+// screen: on screen the layers say what is there. A convex surface lies behind its tangent
+// planes, so a ray leaving it never crosses one from the front.
+fn beyond_the_edge(
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    on_screen: f32,
+    left_at: f32,
+    radius: f32,
+    size: vec2<f32>,
+    dims: vec2<i32>,
+) -> bool {
+    let exit = view.clip_from_view * vec4<f32>(origin + dir * left_at, 1.0);
+    if exit.w <= 0.0 {
+        // Behind the camera: no edge pixel lies in that direction.
+        return false;
+    }
+    let edge = clamp(vec2<i32>(floor(ndc_to_uv(exit.xy / exit.w) * size)), vec2<i32>(0), dims - 1);
+    let depth = textureLoad(front_depth, edge, 0);
+    let world_normal = decode_normal(textureLoad(front_normal, edge, 0).xyz);
+    if depth <= 0.0 || all(world_normal == vec3<f32>(0.0)) {
+        return false;
+    }
+    let e = view_position(edge, size, depth);
+    let m = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    // The side of the plane the camera is on is the open one.
+    let orthographic = view.clip_from_view[3][3] == 1.0;
+    let to_eye = select(-e, vec3<f32>(0.0, 0.0, 1.0), orthographic);
+    let up = select(m, -m, dot(m, to_eye) < 0.0);
+    let start = dot(origin + dir * on_screen - e, up);
+    let end = dot(origin + dir * radius - e, up);
+    if !(start > 0.0 && end < 0.0) {
+        return false;
+    }
+    let t = on_screen + (radius - on_screen) * start / (start - end);
+    let meet = view.clip_from_view * vec4<f32>(origin + dir * t, 1.0);
+    if meet.w <= 0.0 {
+        return true;
+    }
+    let uv = ndc_to_uv(meet.xy / meet.w);
+    return any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0));
 }
 
 // How far above the surface at view-space `p` with normal `n` rays start, metres, where a pixel
@@ -136,6 +184,9 @@ fn march(r: Receiver, sequence: u32) -> f32 {
             let dir = t1 * (sin_theta * cos(phi)) + t2 * (sin_theta * sin(phi)) + n * cos_theta;
             // Clip space is linear in view space: each step adds to the receiver's clip position.
             let clip_dir = view.clip_from_view * vec4<f32>(dir, 0.0);
+            // How far the ray got on screen, and where it left it (`beyond_the_edge`).
+            var on_screen = 0.0;
+            var left_at = -1.0;
             for (var s = 0u; s < settings.ray_march_steps; s++) {
                 let t = (f32(s) + step_offset) / f32(settings.ray_march_steps) * radius;
                 let z = origin.z + dir.z * t;
@@ -143,8 +194,15 @@ fn march(r: Receiver, sequence: u32) -> f32 {
                 let state = blocked(z, previous_z, step, clip + clip_dir * t, r.size, dims, radius);
                 if state != 0 {
                     hits += u32(state == 1);
+                    left_at = select(-1.0, t, state == -1);
                     break;
                 }
+                on_screen = t;
+            }
+            // Once per ray, after its loop: CPU rasterizers run a branch inside the loop for
+            // every step.
+            if left_at >= 0.0 {
+                hits += u32(beyond_the_edge(origin, dir, on_screen, left_at, radius, r.size, dims));
             }
         }
     }

@@ -24,6 +24,10 @@ pub fn wendland(t: f32, h: f32) -> f32 {
 /// of the window farther away is under 0.03, and the shader skips them.
 const UPSAMPLE_REACH: f32 = 2.5;
 
+/// Support of the upsampling's normal weight over 1 − cos of the angle between the normals
+/// (`NORMAL_SUPPORT` in `shaders/joint_upsample.wgsl`, which says why).
+const UPSAMPLE_NORMAL_SUPPORT: f32 = 1.5;
+
 /// The texels `filter/upsample.wgsl` blends for a pixel (those within [`UPSAMPLE_REACH`]), as
 /// offsets from the pixel's own texel.
 const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
@@ -97,7 +101,7 @@ pub fn joint_bilateral_upsample_pair(
                 let h_y = v_y[0] + v_y[1];
                 let world = p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
                 let weight = wendland(screen, 4.0)
-                    * wendland(1.0 - t.normal.dot(q.normal), 2.0)
+                    * wendland(1.0 - t.normal.dot(q.normal), UPSAMPLE_NORMAL_SUPPORT)
                     * wendland(world, radius)
                     * wendland((h_x - h_y).abs(), 1.0);
                 sum[0] += weight * v_y[0];

@@ -75,6 +75,59 @@ pub fn ray_march_occlusion(
     nd.per_pixel(|x, y| pixel_occlusion(nd, view, inputs, x, y))
 }
 
+/// Whether the ray from view-space `origin` along unit `dir`, still free on screen at distance
+/// `on_screen` and off it at `left_at`, meets the tangent plane of the surface at the screen's
+/// edge where it left, off screen and within `radius`: `beyond_the_edge` in `march.wgsl`, which
+/// says why.
+fn beyond_the_edge(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    origin: Vec3,
+    dir: Vec3,
+    on_screen: f32,
+    left_at: f32,
+    radius: f32,
+) -> bool {
+    let (w, h) = (nd.width, nd.height);
+    let exit = view.clip_from_view * (origin + dir * left_at).extend(1.0);
+    if exit.w <= 0.0 {
+        return false;
+    }
+    let ndc = exit.xyz() / exit.w;
+    let edge = IVec2::new(
+        (((ndc.x + 1.0) * 0.5 * w as f32).floor() as i32).clamp(0, w as i32 - 1),
+        (((1.0 - ndc.y) * 0.5 * h as f32).floor() as i32).clamp(0, h as i32 - 1),
+    );
+    let Some(texel) = nd.texel(false, edge.x, edge.y) else {
+        return false;
+    };
+    if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
+        return false;
+    }
+    let e = view.view_position(edge.x, edge.y, w, h, texel.depth);
+    let m = (view.view_from_world * texel.normal.extend(0.0))
+        .xyz()
+        .normalize();
+    let to_eye = if view.clip_from_view.w_axis.w == 1.0 {
+        Vec3::Z
+    } else {
+        -e
+    };
+    let up = if m.dot(to_eye) < 0.0 { -m } else { m };
+    let start = (origin + dir * on_screen - e).dot(up);
+    let end = (origin + dir * radius - e).dot(up);
+    if !(start > 0.0 && end < 0.0) {
+        return false;
+    }
+    let t = on_screen + (radius - on_screen) * start / (start - end);
+    let meet = view.clip_from_view * (origin + dir * t).extend(1.0);
+    if meet.w <= 0.0 {
+        return true;
+    }
+    let (u, v) = ((meet.x / meet.w + 1.0) * 0.5, (1.0 - meet.y / meet.w) * 0.5);
+    !(0.0..1.0).contains(&u) || !(0.0..1.0).contains(&v)
+}
+
 /// How far above the surface at view-space `p` with normal `n` rays start, metres, where a pixel
 /// is `footprint` wide: `start_height` in `march.wgsl`, which says why. Twice the least
 /// height at which a step cannot read as behind the depth at the centre of the pixel it projects
@@ -116,14 +169,20 @@ pub fn pixel_occlusion(
             let u = (j as f32 + jitter) / inputs.elevations as f32;
             let (sin_theta, cos_theta) = (u.sqrt(), (1.0 - u).sqrt());
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
+            let mut on_screen = 0.0;
             for s in 0..inputs.steps {
                 let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
                 let previous_z = origin.z + dir.z * (t - step).max(0.0);
                 let state = blocked(nd, view, origin + dir * t, previous_z, step, inputs);
+                if state == -1 {
+                    let edge = beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius);
+                    hits += u32::from(edge);
+                }
                 if state != 0 {
                     hits += u32::from(state == 1);
                     break;
                 }
+                on_screen = t;
             }
         }
     }

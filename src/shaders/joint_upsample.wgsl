@@ -15,6 +15,13 @@
 
 // Screen-space support of w_d, full-resolution pixels (the m of eq. 6).
 const WINDOW: f32 = 4.0;
+// Support of w_n over 1 − cos of the angle between a texel's normal and the pixel's: a surface at
+// a right angle to the pixel's counts a twentieth, one at 60° a half. At 2 a right angle counted
+// a fifth, and the image-space terms carried occlusion across edges a pixel or two wide, such as
+// a heat sink's bright fin tops between its dark gaps (converged high-frequency error 6% lower
+// there, 3% on DamagedHelmet on a floor). At 1 (nothing at a right angle) the fins gained twice
+// as much, but a room's creases lost more detail than Bevy's SSAO does (BENCHMARKS.md, "Fins").
+const NORMAL_SUPPORT: f32 = 1.5;
 
 // The bracketing texels of one full-resolution pixel: texel k (`bracket_texel`) counts with
 // `weights[k]` (0 where it lies off the buffer, on the background, or on another surface);
@@ -67,10 +74,9 @@ fn texel_guide(
 }
 
 // The weight of the texel with guide `g` for pixel `x` (world position `p`, unit normal `n`):
-// `reach` (metres) is the support of the world-distance weight, `bend` that of the normal
-// weight.
-fn guide_weight(g: Guide, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, reach: f32, bend: f32) -> f32 {
-    return screen_weight(length(vec2<f32>(x - g.y))) * surface_weight(g, p, n, reach, bend);
+// `reach` (metres) is the support of the world-distance weight.
+fn guide_weight(g: Guide, x: vec2<i32>, p: vec3<f32>, n: vec3<f32>, reach: f32) -> f32 {
+    return screen_weight(length(vec2<f32>(x - g.y))) * surface_weight(g, p, n, reach);
 }
 
 // w_d of a texel `distance` full-resolution pixels from the pixel it counts for.
@@ -79,11 +85,11 @@ fn screen_weight(distance: f32) -> f32 {
 }
 
 // `guide_weight` without w_d: how far the texel's surface agrees with the pixel's.
-fn surface_weight(g: Guide, p: vec3<f32>, n: vec3<f32>, reach: f32, bend: f32) -> f32 {
+fn surface_weight(g: Guide, p: vec3<f32>, n: vec3<f32>, reach: f32) -> f32 {
     if !g.on_surface {
         return 0.0;
     }
-    let w_n = wendland(1.0 - dot(n, g.n), bend);
+    let w_n = wendland(1.0 - dot(n, g.n), NORMAL_SUPPORT);
     let w_p = wendland(distance(p, g.p), reach);
     return w_n * w_p;
 }
@@ -99,16 +105,14 @@ fn texel_weight(
     l: vec2<i32>,
     low_dims: vec2<i32>,
     reach: f32,
-    bend: f32,
 ) -> f32 {
     let g = texel_guide(view, depth_texture, normal_texture, l, low_dims);
-    return guide_weight(g, x, p, n, reach, bend);
+    return guide_weight(g, x, p, n, reach);
 }
 
 // The bracket of pixel `x` (world position `p`, unit normal `n`) in a buffer of `low_dims`
 // texels, over the ND-buffer `depth_texture` / `normal_texture`; `reach` (metres) is the support
-// of the world-distance weight, `bend` that of the normal weight (over 1 − cos of the angle
-// between the normals: 2 lets every surface count, 1 none at a right angle).
+// of the world-distance weight.
 fn bracket(
     view: View,
     depth_texture: texture_depth_2d,
@@ -118,16 +122,15 @@ fn bracket(
     n: vec3<f32>,
     low_dims: vec2<i32>,
     reach: f32,
-    bend: f32,
 ) -> Bracket {
     // Texel l was computed at pixel 2l: an odd x lies between l and l + 1, an even one on l.
     let toward = select(vec2<i32>(-1), vec2<i32>(1), (x & vec2<i32>(1)) == vec2<i32>(1));
     var b = Bracket(min(x / 2, low_dims - 1), toward, vec4<f32>(0.0));
     b.weights = vec4<f32>(
-        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 0), low_dims, reach, bend),
-        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 1), low_dims, reach, bend),
-        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 2), low_dims, reach, bend),
-        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 3), low_dims, reach, bend),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 0), low_dims, reach),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 1), low_dims, reach),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 2), low_dims, reach),
+        texel_weight(view, depth_texture, normal_texture, x, p, n, bracket_texel(b, 3), low_dims, reach),
     );
     return b;
 }

@@ -177,6 +177,50 @@ pub fn shells_on_floor() -> SceneSpec {
     )
 }
 
+/// The camera of [`plate_by_the_edge`] and [`heat_sink`]: above and in front of the objects,
+/// which stand towards the right edge of the view.
+fn heat_sink_camera() -> Transform {
+    Transform::from_xyz(0.7, 0.8, 1.2).looking_at(Vec3::new(-0.15, 0.1, 0.1), Vec3::Y)
+}
+
+/// A plate 0.24 m high, 0.5 m long and 8 mm thick standing on a floor near the right edge of the
+/// view, its face towards the camera: much of the floor it sees lies past the edge, where the
+/// ND-buffer holds nothing.
+pub fn plate_by_the_edge() -> SceneSpec {
+    SceneSpec::new(heat_sink_camera())
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(0.008, 0.24, 0.5),
+            Transform::from_xyz(0.38, 0.12, 0.0),
+        )
+}
+
+/// Detail finer than a half-resolution texel: a heat sink (a 0.8 × 0.5 m base 4 cm thick carrying
+/// 20 fins 8 mm thick, 0.2 m tall and 4 cm apart, gaps of one to two pixels at 160 × 120) and
+/// beside it a grille of 12 upright bars 1 cm square and 3 cm apart, on a floor.
+/// `docs/ring_on_floor.py --fins` writes the same scene for `ao_capture`.
+pub fn heat_sink() -> SceneSpec {
+    let mut scene = SceneSpec::new(heat_sink_camera())
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(0.8, 0.04, 0.5),
+            Transform::from_xyz(0.0, 0.02, 0.0),
+        );
+    for k in 0..20 {
+        scene = scene.with(
+            Cuboid::new(0.008, 0.2, 0.5),
+            Transform::from_xyz(-0.38 + 0.04 * k as f32, 0.14, 0.0),
+        );
+    }
+    for k in 0..12 {
+        scene = scene.with(
+            Cuboid::new(0.01, 0.35, 0.01),
+            Transform::from_xyz(-0.745 + 0.03 * k as f32, 0.175, 0.605),
+        );
+    }
+    scene
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [
