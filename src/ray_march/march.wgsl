@@ -75,13 +75,16 @@ fn blocked(
 fn beyond_the_edge(
     origin: vec3<f32>,
     dir: vec3<f32>,
+    clip: vec4<f32>,
+    clip_dir: vec4<f32>,
     on_screen: f32,
     left_at: f32,
     radius: f32,
     size: vec2<f32>,
     dims: vec2<i32>,
 ) -> bool {
-    let exit = view.clip_from_view * vec4<f32>(origin + dir * left_at, 1.0);
+    // Clip space is linear along the ray, as in the march.
+    let exit = clip + clip_dir * left_at;
     if exit.w <= 0.0 {
         // Behind the camera: no edge pixel lies in that direction.
         return false;
@@ -93,7 +96,7 @@ fn beyond_the_edge(
         return false;
     }
     let e = view_position(edge, size, depth);
-    let m = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
+    let m = (view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz;
     // The side of the plane the camera is on is the open one.
     let orthographic = view.clip_from_view[3][3] == 1.0;
     let to_eye = select(-e, vec3<f32>(0.0, 0.0, 1.0), orthographic);
@@ -103,8 +106,7 @@ fn beyond_the_edge(
     if !(start > 0.0 && end < 0.0) {
         return false;
     }
-    let t = on_screen + (radius - on_screen) * start / (start - end);
-    let meet = view.clip_from_view * vec4<f32>(origin + dir * t, 1.0);
+    let meet = clip + clip_dir * (on_screen + (radius - on_screen) * start / (start - end));
     if meet.w <= 0.0 {
         return true;
     }
@@ -202,7 +204,7 @@ fn march(r: Receiver, sequence: u32) -> f32 {
             // Once per ray, after its loop: CPU rasterizers run a branch inside the loop for
             // every step.
             if left_at >= 0.0 {
-                hits += u32(beyond_the_edge(origin, dir, on_screen, left_at, radius, r.size, dims));
+                hits += u32(beyond_the_edge(origin, dir, clip, clip_dir, on_screen, left_at, radius, r.size, dims));
             }
         }
     }
