@@ -64,14 +64,14 @@ fn blocked(
     return select(0, 1, front_z - z < radius);
 }
 
-// Whether the ray from view-space `origin` along unit `dir`, which was still free on screen at
-// distance `on_screen` and had left the screen at `left_at`, is blocked within `radius` by the
-// surface at the screen's edge where it left, continued as that surface's tangent plane: what
-// lies past the edge is not in the ND-buffer, and counted as open, a floor running out of the
-// view left a wall beside the edge without the floor's occlusion (a plate near the view's edge
-// read 0.23 occluded against the truth's 0.40). The plane counts only where the ray meets it off
-// screen: on screen the layers say what is there. A convex surface lies behind its tangent
-// planes, so a ray leaving it never crosses one from the front.
+// Whether the ray from view-space `origin` along unit `dir` (clip-space `clip` and `clip_dir`),
+// which was still free on screen at distance `on_screen` and had left the screen at `left_at`,
+// is blocked within `radius` by the surface at the screen's edge where it left, continued as
+// that surface's tangent plane. What lies past the edge is not in the ND-buffer; counted as open,
+// a floor running out of the view left a plate beside the edge without the floor's occlusion
+// (0.26 occluded against the truth's 0.40; 0.37 with the plane). The plane counts only where the
+// ray meets it off screen: on screen the layers say what is there. A convex surface lies behind
+// its tangent planes, so a ray leaving it never crosses one from the front.
 fn beyond_the_edge(
     origin: vec3<f32>,
     dir: vec3<f32>,

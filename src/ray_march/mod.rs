@@ -10,8 +10,12 @@
 //! start inside grooves a pixel wide). A step is blocked
 //! where it lies behind the front layer and in front of the back-face layer at the pixel it
 //! projects to (inside a solid), or, where no back face was drawn there, less than R behind the
-//! front layer. The occlusion is the fraction of blocked rays: what a ray tracer measures, for
-//! the geometry the two layers hold. Its error against ray-traced ground truth shrinks as the
+//! front layer. A ray that leaves the screen meets, past the edge, the surface the edge pixel
+//! shows, continued as its tangent plane: a floor or wall running out of the view still occludes
+//! what stands near the edge (a plate beside the edge read 0.26 of the truth's 0.40 occlusion
+//! without it, 0.37 with it; room corner's converged default 0.026 → 0.020 RMSE), for about a
+//! tenth of the AO passes' cost on lavapipe. The occlusion is the fraction of blocked rays: what
+//! a ray tracer measures, for the geometry the two layers hold. Its error against ray-traced ground truth shrinks as the
 //! ray count grows; under temporal accumulation the rays' rotation, elevations and step offsets
 //! move every frame, so two rays per pixel and frame at half resolution converge to what many
 //! more give in one frame (see [`AoPreset`](crate::AoPreset)); by default each frame marches only
