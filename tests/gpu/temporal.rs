@@ -305,11 +305,11 @@ fn accumulation_holds_on_scenes_with_every_mesh_an_occluder() {
                 "{name}, R = {radius} m: accumulated 8 samples {eight_error} vs default {plain_error}"
             );
             // Measured: as close as the near field or closer on every scene and radius but the
-            // walker (0.025 against 0.023 at 0.75 m, 0.022 at 2 m; 0.024 against 0.022 at 2 m
-            // while the temporal clamp ran every frame), whose limbs are closed solids with air
-            // between them that the ray march's thickness behind the back faces counts as solid. Before
-            // that thickness the open room at 2 m read 0.113 against 0.109 (its 4 cm wall tops are
-            // under two pixels wide at half resolution); it reads 0.107 now.
+            // walker at 2 m (0.023 against 0.022; 0.025 against 0.023 at 0.75 m before the ray
+            // march continued the surface past the screen's edge), whose limbs are closed solids
+            // with air between them that the ray march's thickness behind the back faces counts
+            // as solid. Before that thickness the open room at 2 m read 0.113 against 0.109 (its
+            // 4 cm wall tops are under two pixels wide at half resolution); it reads 0.108 now.
             assert!(
                 default_error <= plain_error + 0.006,
                 "{name}, R = {radius} m: the default {default_error} vs the near field {plain_error}"
@@ -362,8 +362,8 @@ fn accumulation_works_with_bevys_temporal_anti_aliasing() {
     }
     for (name, (plain, taa), brightness) in rows {
         // The truth is traced without TAA's sub-pixel jitter, which costs the jittered frame a
-        // little at silhouettes. Measured: 0.0139 / 0.0262 / 0.0247 against 0.0133 / 0.0261 /
-        // 0.0234; brightness 1.007 / 1.009 / 1.008.
+        // little at silhouettes. Measured: 0.0133 / 0.0202 / 0.0227 against 0.0129 / 0.0203 /
+        // 0.0208; brightness 1.007 / 1.009 / 1.009.
         assert!(
             taa < plain + 0.002,
             "{name}: {taa:.4} with TAA, {plain:.4} without"
