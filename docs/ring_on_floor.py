@@ -9,7 +9,7 @@ bumpy ball of 60,000 triangles (radius 0.45 m, normals from its faces) resting o
 and camera with a heat sink: a 0.8 x 0.5 m base 4 cm thick carrying 20 fins 8 mm thick, 0.2 m
 tall and 4 cm apart (gaps of about a pixel at 160 x 120, six at 640 x 480), and beside it a
 grille of 12 upright bars 1 cm square and 3 cm apart: detail finer than a half-resolution texel
-(BENCHMARKS.md, "Fins"). Standard library only.
+(BENCHMARKS.md, "Past the screen's edge, and fins"). Standard library only.
 
     python3 docs/ring_on_floor.py /tmp/ring_on_floor.glb
     python3 docs/ring_on_floor.py /tmp/blob_and_slab.glb --blob

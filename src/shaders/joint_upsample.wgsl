@@ -20,7 +20,8 @@ const WINDOW: f32 = 4.0;
 // a fifth, and the image-space terms carried occlusion across edges a pixel or two wide, such as
 // a heat sink's bright fin tops between its dark gaps (converged high-frequency error 6% lower
 // there, 3% on DamagedHelmet on a floor). At 1 (nothing at a right angle) the fins gained twice
-// as much, but a room's creases lost more detail than Bevy's SSAO does (BENCHMARKS.md, "Fins").
+// as much, but a room's creases lost more detail than Bevy's SSAO does (BENCHMARKS.md, "Past the
+// screen's edge, and fins").
 const NORMAL_SUPPORT: f32 = 1.5;
 
 // The bracketing texels of one full-resolution pixel: texel k (`bracket_texel`) counts with

@@ -527,7 +527,7 @@ fn the_fine_detail_term_holds_with_every_mesh_an_occluder() {
 /// SSAO High's high-frequency error (fin tops bright between dark gaps), at about half its RMSE;
 /// at full resolution the fins keep most of their detail. The rays step over most fins, and
 /// half resolution loses the rest: this scene is where the default is furthest from the truth
-/// (BENCHMARKS.md, "Fins").
+/// (BENCHMARKS.md, "Past the screen's edge, and fins").
 #[test]
 fn fins_keep_their_detail() {
     let scene = crate::scenes::heat_sink();
