@@ -4,11 +4,14 @@
 //! resolution (Reinbothe, Boubekeur & Alexa 2009, §7, eq. 5–7): each pixel averages the
 //! low-resolution texels of the 3 × 3 around its own that lie within 2.5 pixels of it (4 to 6 of
 //! them) with the product of Wendland kernels (eq. 3) over screen distance (support 4 pixels),
-//! normal difference 1 − n(x)·n(y) (support 2; the paper prints 1 + n(x)·n(y), which would
-//! favour opposite normals), world distance (support R) and AO difference (support 1); the
+//! normal difference 1 − n(x)·n(y) (support 1.5; the paper prints 1 + n(x)·n(y), which would
+//! favour opposite normals), the texel's distance from the pixel's tangent plane (support two of
+//! the pixel's footprints, in place of the paper's world distance with support R, which texels
+//! 2.5 pixels away never leave: a fin's top took the occlusion of the gap's floor beside it); the
+//! paper's fourth weight, on the difference of occlusion, kept noise and is left out. The
 //! screen-distance weight of the texels farther away is under 0.03. One invocation upsamples the
-//! 2 × 2 pixels of one texel, reading the eight texels they share once. Where the occlusion was accumulated, the upsampling
-//! reads the temporal pass's history of this frame instead of its output: each history texel
+//! 2 × 2 pixels of one texel, reading the eight texels they share once. Where the occlusion was
+//! accumulated, the upsampling reads the temporal pass's history of this frame instead of its output: each history texel
 //! carries the linear depth and normal it was computed at, so a texel costs one read instead of
 //! a depth, a normal and a value read and an unprojection (the upsampling pass took about a
 //! quarter less time on lavapipe; the normal is then 8-bit, which moved no visibility by more

@@ -1,7 +1,8 @@
 // Joint bilateral upsampling of a half-resolution occlusion buffer (Reinbothe, Boubekeur & Alexa
 // 2009, §7, eq. 5–7): each full-resolution pixel x averages the low-resolution texels y of a
 // window around it, weighted by the Wendland kernel (eq. 3) over screen distance, normal
-// difference, world distance and AO difference (of the summed channels, with TWO_CHANNELS).
+// difference and the texel's distance from the pixel's tangent plane (in place of the paper's
+// world distance: `plane_surface_weight`), without the paper's AO difference (`weight`).
 // One invocation upsamples the 2 × 2 pixels of one texel, reading the texels of the 3 × 3 around
 // it once for the four (their depth, normal, position and value), and each pixel blends those
 // within 2.5 pixels of it (`blend_sum`). They reach past the 2 × 2 that bracket the pixel, and
@@ -17,11 +18,10 @@
 // `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
-#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth}
+#import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth, linear_depth, pixel_world_size}
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::filter_output::store_filtered
-#import bevy_dynamic_ao::math::wendland
-#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, screen_weight, surface_weight}
+#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, screen_weight, plane_surface_weight}
 #import bevy_dynamic_ao::history::unpack_history
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -82,22 +82,51 @@ fn texel(l: vec2<i32>, low_dims: vec2<i32>) -> Texel {
 #endif
 }
 
-// The position of pixel `x` at reverse-Z `depth` in the space the texels' guides are in: view
-// space where they come from linear depths, world space where from the ND-buffer (distances are
-// the same in both).
-fn pixel_position(x: vec2<i32>, dims: vec2<i32>, depth: f32) -> vec3<f32> {
+// The surface a full-resolution pixel shows, in the space the texels' guides are in: view space
+// where they come from linear depths, world space where from the ND-buffer (distances are the same
+// in both).
+struct Pixel {
+    p: vec3<f32>,
+    // World-space unit normal, as the guides' normals are.
+    n: vec3<f32>,
+    // The same normal in the guides' space, for the distance to the pixel's tangent plane.
+    plane_n: vec3<f32>,
+    // World size of the pixel at its depth, metres.
+    footprint: f32,
+}
+
+// Pixel `x` at reverse-Z `depth` with world-space unit normal `n`.
+fn pixel_at(x: vec2<i32>, dims: vec2<i32>, depth: f32, n: vec3<f32>) -> Pixel {
+    let footprint = pixel_world_size(view, linear_depth(view, depth), f32(dims.y));
 #ifdef GUIDE_TEXELS
-    return position_in_view(view, (vec2<f32>(x) + 0.5) / vec2<f32>(dims), depth);
+    let p = position_in_view(view, (vec2<f32>(x) + 0.5) / vec2<f32>(dims), depth);
+    let plane_n = (view.view_from_world * vec4<f32>(n, 0.0)).xyz;
+    return Pixel(p, n, plane_n, footprint);
 #else
-    return world_position(view, x, vec2<f32>(dims), depth);
+    return Pixel(world_position(view, x, vec2<f32>(dims), depth), n, n, footprint);
 #endif
 }
 
-// The weight of texel `t` for a pixel at world position `p` with unit normal `n`, whose quad's
-// texel holds the summed channels `h_x`; `screen` is w_d of the texel's distance to the pixel.
-fn weight(t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> f32 {
-    let w = surface_weight(t.guide, p, n, settings.image_space_radius);
-    return screen * w * wendland(abs(h_x - (t.value.x + t.value.y)), 1.0);
+// The pixel a texel was computed at (quad pixel 0), as its guide `g` holds it: its own texel
+// then weighs 1 on the surface terms.
+fn own_pixel(g: Guide, x: vec2<i32>, dims: vec2<i32>) -> Pixel {
+#ifdef GUIDE_TEXELS
+    let footprint = pixel_world_size(view, -g.p.z, f32(dims.y));
+    return Pixel(g.p, g.n, (view.view_from_world * vec4<f32>(g.n, 0.0)).xyz, footprint);
+#else
+    let footprint =
+        pixel_world_size(view, linear_depth(view, textureLoad(depth_texture, x, 0)), f32(dims.y));
+    return Pixel(g.p, g.n, g.n, footprint);
+#endif
+}
+
+// The weight of texel `t` for pixel `x`; `screen` is w_d of the texel's distance to the pixel.
+// No weight on the difference of occlusion from the quad's own texel (the paper's fourth term,
+// support 1): it held back the texels whose noise differed most from the own texel's, so the
+// average kept more of it, and without it the converged error was the same or lower on all eleven
+// scenes measured (BENCHMARKS.md, "The upsampling against the pixel's plane").
+fn weight(t: Texel, screen: f32, x: Pixel) -> f32 {
+    return screen * plane_surface_weight(t.guide, x.p, x.n, x.plane_n, x.footprint);
 }
 
 // The texels around one texel `oo` that a pixel of its quad blends, named by their offsets
@@ -117,8 +146,8 @@ struct Window {
 
 // `sum` (the weighted channels, and the weights in z) with texel `t` added at screen weight
 // `screen`.
-fn add(sum: vec3<f32>, t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f32) -> vec3<f32> {
-    let w = weight(t, screen, p, n, h_x);
+fn add(sum: vec3<f32>, t: Texel, screen: f32, x: Pixel) -> vec3<f32> {
+    let w = weight(t, screen, x);
     return sum + vec3<f32>(w * t.value, w);
 }
 
@@ -126,9 +155,7 @@ fn add(sum: vec3<f32>, t: Texel, screen: f32, p: vec3<f32>, n: vec3<f32>, h_x: f
 // two texels on its axis, `own` and `next`, lie 1 pixel away, the four others, `a` to `d`, √5 (a
 // knight's move).
 fn beside_sum(
-    p: vec3<f32>,
-    n: vec3<f32>,
-    h_x: f32,
+    x: Pixel,
     own: Texel,
     next: Texel,
     a: Texel,
@@ -138,53 +165,51 @@ fn beside_sum(
 ) -> vec3<f32> {
     let one = screen_weight(1.0);
     let knight = screen_weight(sqrt(5.0));
-    var sum = add(vec3<f32>(0.0), own, one, p, n, h_x);
-    sum = add(sum, next, one, p, n, h_x);
-    sum = add(sum, a, knight, p, n, h_x);
-    sum = add(sum, b, knight, p, n, h_x);
-    sum = add(sum, c, knight, p, n, h_x);
-    return add(sum, d, knight, p, n, h_x);
+    var sum = add(vec3<f32>(0.0), own, one, x);
+    sum = add(sum, next, one, x);
+    sum = add(sum, a, knight, x);
+    sum = add(sum, b, knight, x);
+    sum = add(sum, c, knight, x);
+    return add(sum, d, knight, x);
 }
 
 // The weighted sum (channels, and the weights in z) for quad pixel `quad` (0 the texel's own,
-// 1 right of it, 2 below, 3 diagonal) at world position `p` with unit normal `n`. Each pixel
+// 1 right of it, 2 below, 3 diagonal), showing the surface `x`. Each pixel
 // blends the texels less than 2.5 pixels away (5, 6, 6 and 4 of the 3 × 3): w_d of those farther
 // is under 0.03, against 0.4–1 for the nearest, and skipping them spares 15 of 36 weights a quad.
-// The AO-difference weight compares each texel with the quad's own. `reference::filter` adds the
-// same texels in another order, which moves the last bits only.
-fn blend_sum(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec3<f32> {
-    let h_x = w.oo.value.x + w.oo.value.y;
+// `reference::filter` adds the same texels in another order, which moves the last bits only.
+fn blend_sum(quad: u32, x: Pixel, w: Window) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     switch quad {
         case 0u: {
             let two = screen_weight(2.0);
-            sum = add(sum, w.oo, 1.0, p, n, h_x);
-            sum = add(sum, w.om, two, p, n, h_x);
-            sum = add(sum, w.mo, two, p, n, h_x);
-            sum = add(sum, w.po, two, p, n, h_x);
-            sum = add(sum, w.op, two, p, n, h_x);
+            sum = add(sum, w.oo, 1.0, x);
+            sum = add(sum, w.om, two, x);
+            sum = add(sum, w.mo, two, x);
+            sum = add(sum, w.po, two, x);
+            sum = add(sum, w.op, two, x);
         }
         case 1u: {
-            sum = beside_sum(p, n, h_x, w.oo, w.po, w.om, w.pm, w.op, w.pp);
+            sum = beside_sum(x, w.oo, w.po, w.om, w.pm, w.op, w.pp);
         }
         case 2u: {
-            sum = beside_sum(p, n, h_x, w.oo, w.op, w.mo, w.mp, w.po, w.pp);
+            sum = beside_sum(x, w.oo, w.op, w.mo, w.mp, w.po, w.pp);
         }
         default: {
             let diagonal = screen_weight(sqrt(2.0));
-            sum = add(sum, w.oo, diagonal, p, n, h_x);
-            sum = add(sum, w.po, diagonal, p, n, h_x);
-            sum = add(sum, w.op, diagonal, p, n, h_x);
-            sum = add(sum, w.pp, diagonal, p, n, h_x);
+            sum = add(sum, w.oo, diagonal, x);
+            sum = add(sum, w.po, diagonal, x);
+            sum = add(sum, w.op, diagonal, x);
+            sum = add(sum, w.pp, diagonal, x);
         }
     }
     return sum;
 }
 
-// The blended channels of quad pixel `quad` (`blend_sum`) at position `p` with unit normal `n`,
-// or the quad's own texel's where no texel of the window lies on its surface.
-fn blended(quad: u32, p: vec3<f32>, n: vec3<f32>, w: Window) -> vec2<f32> {
-    let sum = blend_sum(quad, p, n, w);
+// The blended channels of quad pixel `quad` (`blend_sum`) showing `x`, or the quad's own
+// texel's where no texel of the window lies on its surface.
+fn blended(quad: u32, x: Pixel, w: Window) -> vec2<f32> {
+    let sum = blend_sum(quad, x, w);
     return select(w.oo.value, sum.xy / sum.z, sum.z > 0.0);
 }
 
@@ -199,7 +224,7 @@ fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     var encoded = vec3<f32>(0.0);
     if depth > 0.0 {
         encoded = textureLoad(normal_texture, x, 0).xyz;
-        value = blended(quad, pixel_position(x, dims, depth), decode_normal(encoded), w);
+        value = blended(quad, pixel_at(x, dims, depth, decode_normal(encoded)), w);
     }
     store(x, value, encoded);
 }
@@ -232,7 +257,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
         // The guide's own normal may be the history's 8-bit one; the blur gets the layer's.
         encoded = textureLoad(normal_texture, x, 0).xyz;
 #endif
-        value = blended(0u, w.oo.guide.p, w.oo.guide.n, w);
+        value = blended(0u, own_pixel(w.oo.guide, x, dims), w);
     }
     store(x, value, encoded);
     let x1 = x + vec2<i32>(1, 0);

@@ -28,6 +28,11 @@ const UPSAMPLE_REACH: f32 = 2.5;
 /// (`NORMAL_SUPPORT` in `shaders/joint_upsample.wgsl`, which says why).
 const UPSAMPLE_NORMAL_SUPPORT: f32 = 1.5;
 
+/// Support of the upsampling's plane weight over a texel's distance from the pixel's tangent
+/// plane, in the pixel's footprints (`PLANE_SUPPORT` in `shaders/joint_upsample.wgsl`, which
+/// says why).
+const UPSAMPLE_PLANE_SUPPORT: f32 = 2.0;
+
 /// The texels `filter/upsample.wgsl` blends for a pixel (those within [`UPSAMPLE_REACH`]), as
 /// offsets from the pixel's own texel.
 const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
@@ -44,28 +49,21 @@ const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
 
 /// Joint bilateral upsampling of `low` (row-major, `(width + 1) / 2` × `(height + 1) / 2`, texel
 /// (i, j) computed at full-resolution pixel (2i, 2j)) to the size of `nd`, as
-/// `filter/upsample.wgsl` does it. `radius` is the AO radius R (support of the world-distance
-/// kernel), metres.
-pub fn joint_bilateral_upsample(
-    low: &[f32],
-    nd: &NdBuffer,
-    view: &ViewMatrices,
-    radius: f32,
-) -> Vec<f32> {
+/// `filter/upsample.wgsl` does it.
+pub fn joint_bilateral_upsample(low: &[f32], nd: &NdBuffer, view: &ViewMatrices) -> Vec<f32> {
     let pairs: Vec<[f32; 2]> = low.iter().map(|v| [*v, 0.0]).collect();
-    joint_bilateral_upsample_pair(&pairs, nd, view, radius)
+    joint_bilateral_upsample_pair(&pairs, nd, view)
         .into_iter()
         .map(|v| v[0])
         .collect()
 }
 
 /// [`joint_bilateral_upsample`] of two-channel occlusion (`TWO_CHANNELS` in
-/// `filter/upsample.wgsl`): the AO weight compares the channels' sum.
+/// `filter/upsample.wgsl`), both channels with the same weights.
 pub fn joint_bilateral_upsample_pair(
     low: &[[f32; 2]],
     nd: &NdBuffer,
     view: &ViewMatrices,
-    radius: f32,
 ) -> Vec<[f32; 2]> {
     let (w, h) = (nd.width as i32, nd.height as i32);
     let (lw, lh) = ((w + 1) / 2, (h + 1) / 2);
@@ -77,9 +75,9 @@ pub fn joint_bilateral_upsample_pair(
                 continue;
             }
             let p = view.world_position(x, y, nd.width, nd.height, t.depth);
+            let footprint = view.pixel_world_size(linear_depth(view, t.depth), nd.height);
             let nearest = ((x / 2).min(lw - 1), (y / 2).min(lh - 1));
             let v_x = low[(nearest.1 * lw + nearest.0) as usize];
-            let h_x = v_x[0] + v_x[1];
             // The 3 × 3 texels around the pixel's own (texel l was computed at pixel 2l), its
             // own first, in the order the shader adds them.
             let (mut sum, mut weights) = ([0.0f32; 2], 0.0f32);
@@ -98,12 +96,13 @@ pub fn joint_bilateral_upsample_pair(
                     continue;
                 }
                 let v_y = low[(ly * lw + lx) as usize];
-                let h_y = v_y[0] + v_y[1];
-                let world = p.distance(view.world_position(qx, qy, nd.width, nd.height, q.depth));
+                let q_p = view.world_position(qx, qy, nd.width, nd.height, q.depth);
                 let weight = wendland(screen, 4.0)
                     * wendland(1.0 - t.normal.dot(q.normal), UPSAMPLE_NORMAL_SUPPORT)
-                    * wendland(world, radius)
-                    * wendland((h_x - h_y).abs(), 1.0);
+                    * wendland(
+                        t.normal.dot(q_p - p).abs(),
+                        UPSAMPLE_PLANE_SUPPORT * footprint,
+                    );
                 sum[0] += weight * v_y[0];
                 sum[1] += weight * v_y[1];
                 weights += weight;
@@ -378,7 +377,7 @@ mod tests {
     fn upsampling_a_constant_keeps_it() {
         let (_, nd, view) = step_edge();
         let low = vec![0.3; 16 * 4];
-        let up = joint_bilateral_upsample(&low, &nd, &view, 1.0);
+        let up = joint_bilateral_upsample(&low, &nd, &view);
         assert!(up.iter().all(|v| (v - 0.3).abs() < 1e-6));
     }
 

@@ -82,12 +82,12 @@ pub struct DynamicAo {
     /// (on, as every [`AoPreset`] has it).
     pub temporal: AoTemporal,
     /// Compute the occlusion at half resolution in each axis and bring it back to full
-    /// resolution with a joint bilateral upsampling over normals, positions and AO (Reinbothe et
-    /// al. 2009, eq. 5–7, over the texels of the 3 × 3 around each pixel's own within 2.5
-    /// pixels of it); the blur, where it
-    /// runs, then runs at full resolution. The sphere and field splats
-    /// follow it (each texel evaluates one pixel of its 2 × 2; compose upsamples them over
-    /// normals and positions). Default: `true` (as [`AoPreset::High`] has it).
+    /// resolution with a joint bilateral upsampling over normals and the distance from each
+    /// pixel's tangent plane (Reinbothe et al. 2009, eq. 5–7, over the texels of the 3 × 3 around
+    /// each pixel's own within 2.5 pixels of it; [`crate::filter`] says where it departs from
+    /// the paper); the blur, where it runs, then runs at full resolution. The sphere and field
+    /// splats follow it (each texel evaluates one pixel of its 2 × 2; compose upsamples them
+    /// over normals and positions). Default: `true` (as [`AoPreset::High`] has it).
     pub half_resolution: bool,
     /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)'s
     /// proxies in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are

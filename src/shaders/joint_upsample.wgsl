@@ -4,7 +4,8 @@
 // screen distance, normal difference and world distance to the pixel it was computed at (texel l
 // at pixel 2l). Used by compose for the sphere and field splats (`bracket`), and by the filter's
 // upsampling of the image-space and voxel terms (`texel_guide` and `guide_weight`, over the 3 × 3
-// texels around a 2 × 2 quad of pixels' own, joined with an AO-difference weight).
+// texels around a 2 × 2 quad of pixels' own, weighing the distance from the pixel's tangent
+// plane in place of the world distance, `plane_surface_weight`).
 // `reference::filter` is the CPU twin.
 
 #define_import_path bevy_dynamic_ao::joint_upsample
@@ -23,6 +24,9 @@ const WINDOW: f32 = 4.0;
 // as much, but a room's creases lost more detail than Bevy's SSAO does (BENCHMARKS.md, "Past the
 // screen's edge, and fins").
 const NORMAL_SUPPORT: f32 = 1.5;
+// Support of the upsampling's plane weight (`plane_surface_weight`) over a texel's distance from the
+// pixel's tangent plane, in the pixel's footprints (its world size at its depth).
+const PLANE_SUPPORT: f32 = 2.0;
 
 // The bracketing texels of one full-resolution pixel: texel k (`bracket_texel`) counts with
 // `weights[k]` (0 where it lies off the buffer, on the background, or on another surface);
@@ -90,9 +94,33 @@ fn surface_weight(g: Guide, p: vec3<f32>, n: vec3<f32>, reach: f32) -> f32 {
     if !g.on_surface {
         return 0.0;
     }
-    let w_n = wendland(1.0 - dot(n, g.n), NORMAL_SUPPORT);
-    let w_p = wendland(distance(p, g.p), reach);
-    return w_n * w_p;
+    return normal_weight(g, n) * wendland(distance(p, g.p), reach);
+}
+
+// w_n: how far the normal of the texel with guide `g` agrees with the pixel's, `n`.
+fn normal_weight(g: Guide, n: vec3<f32>) -> f32 {
+    return wendland(1.0 - dot(n, g.n), NORMAL_SUPPORT);
+}
+
+// `surface_weight` as the upsampling of the image-space and voxel terms weighs it: the texel's
+// distance from the tangent plane of the pixel (at `p`, with unit normal `plane_n`, both in the
+// guide's space; world-space normal `n`; `footprint` metres wide) in place of its world distance
+// to the pixel. The world distance's support is R, and texels 2.5 pixels away lie well inside it
+// whatever surface they show: a fin's top a pixel wide took the occlusion of the gap's floor
+// beside it, 5 cm lower and facing the same way. Measured against the plane, not the pixel, a
+// floor seen at a grazing angle, whose texels lie many footprints away along it, keeps them all,
+// and a texel on another surface far away lies far off the plane as well.
+fn plane_surface_weight(
+    g: Guide,
+    p: vec3<f32>,
+    n: vec3<f32>,
+    plane_n: vec3<f32>,
+    footprint: f32,
+) -> f32 {
+    if !g.on_surface {
+        return 0.0;
+    }
+    return normal_weight(g, n) * wendland(abs(dot(plane_n, g.p - p)), PLANE_SUPPORT * footprint);
 }
 
 // The weight of texel `l` for pixel `x` (world position `p`, unit normal `n`).

@@ -35,7 +35,7 @@ fn cpu_half_resolution(frame: &Frame, ao: &DynamicAo, radius: f32) -> Vec<f32> {
             )
         })
         .collect();
-    let up = joint_bilateral_upsample(&low, &frame.nd, &frame.view, radius);
+    let up = joint_bilateral_upsample(&low, &frame.nd, &frame.view);
     cross_bilateral_blur(&up, &frame.nd, &frame.view, &ao.blur)
         .into_iter()
         .map(|o| 1.0 - o)

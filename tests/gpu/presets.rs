@@ -104,7 +104,7 @@ fn presets_converge_and_the_default_beats_bevy_ssao() {
             "{name}: preset {preset:?} converged RMSE {error} not below Bevy's High {bevy}"
         );
         if preset == AoPreset::default() {
-            // Measured: 0.08–0.19 × Bevy's RMSE; high-frequency error 0.0072 / 0.0116 / 0.0118
+            // Measured: 0.08–0.15 × Bevy's RMSE; high-frequency error 0.0069 / 0.0116 / 0.0116
             // against Bevy's 0.0230 / 0.0119 / 0.0182 (room corner the closest: the upsampling's
             // nine texels took it from 0.0128 once the blur stopped running).
             assert!(
@@ -163,9 +163,10 @@ fn the_default_keeps_detail_on_third_party_models() {
             scene.name,
             error / bevy
         );
-        // Measured: 0.11–0.30 × Bevy's RMSE (DamagedHelmet 0.30×: 0.34× before steps just behind
+        // Measured: 0.10–0.27 × Bevy's RMSE (DamagedHelmet 0.27×, 0.30× before the upsampling
+        // weighed the distance from the pixel's plane; 0.34× before steps just behind
         // the back-face layer counted as blocked, 0.31× while the blur added the fine-detail term
-        // at full resolution, 0.39× before the term); high-frequency error 0.014–0.036 against
+        // at full resolution, 0.39× before the term); high-frequency error 0.013–0.034 against
         // Bevy's 0.032–0.044. The README's figure: under a third of Bevy's error on every model.
         assert!(
             error <= 0.32 * bevy,

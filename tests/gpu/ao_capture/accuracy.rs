@@ -252,9 +252,11 @@ fn captures_the_far_field_of_the_generated_scene() {
                 "  {term}: alone {alone:.4}, near-field+{term} {joined:.4}, with --far-blend add \
                  {added:.4}"
             );
-            // Measured: 0.66–0.71 × the near field's RMSE at 0.75 m (0.60–0.64 × while the
-            // accumulated near field was still blurred), 0.27–0.31 × at 2 m (0.24–0.28 ×).
-            let bound = if radius < 1.0 { 0.73 } else { 0.32 };
+            // Measured: 0.66–0.72 × the near field's RMSE at 0.75 m (0.60–0.64 × while the
+            // accumulated near field was still blurred), 0.28–0.32 × at 2 m (0.24–0.28 ×); the
+            // voxels' 0.32 at 2 m since the upsampling weighs the distance from the pixel's
+            // plane (0.319 before).
+            let bound = if radius < 1.0 { 0.73 } else { 0.33 };
             assert!(
                 joined <= bound * near,
                 "{term} at {radius} m: {joined} vs {near}"

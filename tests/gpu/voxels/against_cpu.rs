@@ -31,7 +31,7 @@ fn cpu_voxel_visibility(
         count_once: None,
     };
     let low = voxel_ao_map(&frame.nd, &frame.view, &volumes, &camera);
-    let full = joint_bilateral_upsample_pair(&low, &frame.nd, &frame.view, ao.effective_radius());
+    let full = joint_bilateral_upsample_pair(&low, &frame.nd, &frame.view);
     let rest: Vec<f32> = full.iter().map(|[_, rest]| *rest).collect();
     // The voxel term's blur weighs by depth alone.
     let blur = AoBlur {
