@@ -373,6 +373,44 @@ mod tests {
         assert!(wendland(0.5, 2.0) > wendland(1.0, 2.0));
     }
 
+    /// Two surfaces facing the camera 5 cm apart at 1 m, far inside any AO radius but several
+    /// pixel footprints apart in depth (a fin's top over the floor between the fins): each pixel
+    /// takes only the texels of its own surface, whichever lie in its window.
+    #[test]
+    fn upsampling_keeps_a_small_step_apart() {
+        let (w, h) = (32u32, 120u32);
+        let view = ViewMatrices::new(
+            Mat4::IDENTITY,
+            Mat4::perspective_infinite_reverse_rh(1.0, w as f32 / h as f32, 0.1),
+        );
+        let near = |x: i32| x < 15;
+        let front: Vec<NdTexel> = (0..w * h)
+            .map(|i| NdTexel {
+                normal: Vec3::Z,
+                depth: 0.1 / if near((i % w) as i32) { 1.0 } else { 1.05 },
+            })
+            .collect();
+        let nd = NdBuffer {
+            width: w,
+            height: h,
+            back: vec![NdTexel::default(); (w * h) as usize],
+            front,
+        };
+        let (lw, lh) = (w.div_ceil(2), h.div_ceil(2));
+        let low: Vec<f32> = (0..lw * lh)
+            .map(|i| if near(2 * (i % lw) as i32) { 0.8 } else { 0.0 })
+            .collect();
+        let up = joint_bilateral_upsample(&low, &nd, &view);
+        for (i, v) in up.iter().enumerate() {
+            let own = if near(i as i32 % w as i32) { 0.8 } else { 0.0 };
+            assert!(
+                (v - own).abs() < 1e-5,
+                "pixel {} took {v} across the step",
+                i as u32 % w
+            );
+        }
+    }
+
     #[test]
     fn upsampling_a_constant_keeps_it() {
         let (_, nd, view) = step_edge();
