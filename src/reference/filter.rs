@@ -263,25 +263,24 @@ mod tests {
     use crate::reference::nd_buffer::NdTexel;
     use bevy::math::{Mat4, Vec3};
 
-    /// A vertical depth edge: the left half is a near surface in a dark crease, the right half a
-    /// far, open surface.
-    fn step_edge() -> (Vec<f32>, NdBuffer, ViewMatrices) {
-        let (w, h) = (32u32, 8u32);
+    /// A `w` × `h` view of two planes facing the camera, without back faces: pixel columns where
+    /// `near` holds show the one `near_z` metres away, the others the one `far_z` metres away.
+    fn two_planes(
+        (w, h): (u32, u32),
+        near: impl Fn(u32) -> bool,
+        near_z: f32,
+        far_z: f32,
+    ) -> (NdBuffer, ViewMatrices) {
         let view = ViewMatrices::new(
             Mat4::IDENTITY,
             Mat4::perspective_infinite_reverse_rh(1.0, w as f32 / h as f32, 0.1),
         );
-        // Reverse-Z depth of a surface at 1 m and at 4 m.
-        let depth = |z: f32| 0.1 / z;
-        let near = |x: u32| x < w / 2;
+        // Reverse-Z depth of a surface z metres away, under this projection's 0.1 m near plane.
         let front = (0..w * h)
             .map(|i| NdTexel {
                 normal: Vec3::Z,
-                depth: if near(i % w) { depth(1.0) } else { depth(4.0) },
+                depth: 0.1 / if near(i % w) { near_z } else { far_z },
             })
-            .collect();
-        let occlusion = (0..w * h)
-            .map(|i| if near(i % w) { 0.8 } else { 0.0 })
             .collect();
         let nd = NdBuffer {
             width: w,
@@ -289,6 +288,18 @@ mod tests {
             back: vec![NdTexel::default(); (w * h) as usize],
             front,
         };
+        (nd, view)
+    }
+
+    /// A vertical depth edge: the left half is a near surface in a dark crease, the right half a
+    /// far, open surface.
+    fn step_edge() -> (Vec<f32>, NdBuffer, ViewMatrices) {
+        let (w, h) = (32u32, 8u32);
+        let near = |x: u32| x < w / 2;
+        let (nd, view) = two_planes((w, h), near, 1.0, 4.0);
+        let occlusion = (0..w * h)
+            .map(|i| if near(i % w) { 0.8 } else { 0.0 })
+            .collect();
         (occlusion, nd, view)
     }
 
@@ -379,30 +390,15 @@ mod tests {
     #[test]
     fn upsampling_keeps_a_small_step_apart() {
         let (w, h) = (32u32, 120u32);
-        let view = ViewMatrices::new(
-            Mat4::IDENTITY,
-            Mat4::perspective_infinite_reverse_rh(1.0, w as f32 / h as f32, 0.1),
-        );
-        let near = |x: i32| x < 15;
-        let front: Vec<NdTexel> = (0..w * h)
-            .map(|i| NdTexel {
-                normal: Vec3::Z,
-                depth: 0.1 / if near((i % w) as i32) { 1.0 } else { 1.05 },
-            })
-            .collect();
-        let nd = NdBuffer {
-            width: w,
-            height: h,
-            back: vec![NdTexel::default(); (w * h) as usize],
-            front,
-        };
+        let near = |x: u32| x < 15;
+        let (nd, view) = two_planes((w, h), near, 1.0, 1.05);
         let (lw, lh) = (w.div_ceil(2), h.div_ceil(2));
         let low: Vec<f32> = (0..lw * lh)
-            .map(|i| if near(2 * (i % lw) as i32) { 0.8 } else { 0.0 })
+            .map(|i| if near(2 * (i % lw)) { 0.8 } else { 0.0 })
             .collect();
         let up = joint_bilateral_upsample(&low, &nd, &view);
         for (i, v) in up.iter().enumerate() {
-            let own = if near(i as i32 % w as i32) { 0.8 } else { 0.0 };
+            let own = if near(i as u32 % w) { 0.8 } else { 0.0 };
             assert!(
                 (v - own).abs() < 1e-5,
                 "pixel {} took {v} across the step",
