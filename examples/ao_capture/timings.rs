@@ -41,8 +41,9 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
             continue;
         };
         all += mean;
-        // Every pass on its own line on stderr; stdout keeps the one summary line.
-        eprintln!("timings: pass {name} {mean:.3} ms");
+        // Every pass on its own line on stderr, none starting `timings:`: stdout and stderr read
+        // together still hold one summary line.
+        eprintln!("ao_capture: gpu span {name}: {mean:.3} ms");
         if is_ao_pass(name, bevy_ssao) {
             ao += mean;
             let measured = diagnostic.history_len();
@@ -76,8 +77,9 @@ fn empty_span_warning(
     let empty = values.filter(|ms| *ms < EMPTY_SPAN_MS).count();
     (measured > 0 && empty * 4 >= measured).then(|| {
         format!(
-            "timings: warning: span {name} read under {EMPTY_SPAN_MS} ms in {empty} of {measured} \
-             frames; the adapter's timestamps left that work out, so ao_gpu_ms understates it"
+            "ao_capture: warning: gpu span {name} read under {EMPTY_SPAN_MS} ms in {empty} of \
+             {measured} frames; the adapter's timestamps left that work out, so ao_gpu_ms \
+             understates it"
         )
     })
 }
@@ -102,7 +104,7 @@ mod tests {
         // 2 of 8 frames empty: a quarter, so the span is named, with both counts.
         let values = [9.8, 0.0, 10.1, 0.1, 19.7, 9.6, 20.3, 12.6];
         let warning = empty_span_warning("dynamic_ao_temporal", values.into_iter(), 8).unwrap();
-        assert!(warning.starts_with("timings: warning: span dynamic_ao_temporal"));
+        assert!(warning.starts_with("ao_capture: warning: gpu span dynamic_ao_temporal"));
         assert!(warning.contains("in 2 of 8 frames"), "{warning}");
         // 1 of 8 is not enough, and nothing measured warns of nothing.
         let values = [9.8, 0.0, 10.1, 10.3, 19.7, 9.6, 20.3, 12.6];

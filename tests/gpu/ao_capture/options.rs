@@ -30,8 +30,13 @@ fn default_technique_and_timings() {
         args.extend(extra.iter().map(|a| a.to_string()));
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = run_ok(&args);
-        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-        (read_visibility_png(&out_ao).expect("a PNG").2, stdout)
+        // Both streams, as a script that merges them reads them.
+        let text = format!(
+            "{}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (read_visibility_png(&out_ao).expect("a PNG").2, text)
     };
     let rmse = |a: &[f32], b: &[f32]| {
         (a.iter().zip(b).map(|(a, b)| (a - b).powi(2)).sum::<f32>() / a.len() as f32).sqrt()
@@ -96,8 +101,13 @@ fn default_technique_and_timings() {
 
     let timings = |technique: &str| -> (f64, f64, u32) {
         let (_, text) = capture(technique, &["--frames", "12", "--timings"]);
-        let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("timings:")).collect();
+        let lines: Vec<&str> = text.lines().filter(|l| l.contains("timings:")).collect();
         assert_eq!(lines.len(), 1, "exactly one timings line in:\n{text}");
+        assert!(lines[0].starts_with("timings: "), "{}", lines[0]);
+        assert!(
+            text.contains("gpu span "),
+            "each pass's mean goes to stderr:\n{text}"
+        );
         let field = |key: &str| -> String {
             lines[0]
                 .split_whitespace()
