@@ -10,7 +10,9 @@
 //! same encoding: reverse-Z `Depth32Float` depth and world-space normals stored as `n*0.5+0.5` in
 //! `Rgb10a2Unorm`. WGSL helpers to read them live in `shaders/nd_buffer.wgsl`. The back layer's
 //! normals are drawn only where the near field reads them; for every other technique the layer
-//! is depth only, drawn without a fragment stage.
+//! is depth only, drawn without a fragment stage and with a vertex stage of its own
+//! (`back_depth.wgsl`) that computes the clip position alone, through the same morph, skin and
+//! transform functions as Bevy's.
 
 mod front_layer;
 mod node;
@@ -39,6 +41,7 @@ pub struct NdBufferPlugin;
 impl Plugin for NdBufferPlugin {
     fn build(&self, app: &mut App) {
         embedded_asset!(app, "layer_normals.wgsl");
+        embedded_asset!(app, "back_depth.wgsl");
         embedded_asset!(app, "front_layer.wgsl");
         app.add_plugins((
             SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(RenderDebugFlags::default()),

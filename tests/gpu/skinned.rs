@@ -80,9 +80,22 @@ fn camera() -> Transform {
     Transform::from_xyz(0.0, 0.7, 2.2).looking_at(Vec3::new(0.2, 0.65, 0.0), Vec3::Y)
 }
 
+/// The two ways the back layer is drawn: with normals (the near field) and its depth alone, with
+/// a vertex stage of its own (the ray march, the default's technique).
+const BACK_LAYER_DRAWS: [AoTechnique; 2] = [AoTechnique::NearField, AoTechnique::RayMarch];
+
 #[test]
 fn back_layer_follows_the_skin() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
+    for technique in BACK_LAYER_DRAWS {
+        skinned_column(technique);
+    }
+}
+
+fn skinned_column(technique: AoTechnique) {
+    let mut gpu = Gpu::new(
+        &SceneSpec::new(camera()),
+        plain_ao().with_technique(technique),
+    );
     let world = gpu.app.world_mut();
     let bindposes = column_bindposes(world);
     let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
@@ -107,12 +120,21 @@ fn back_layer_follows_the_skin() {
         Transform::IDENTITY,
     ));
     let frame = gpu.frame(6);
-    assert_same_bent_silhouette(&frame, "skinned");
+    assert_same_bent_silhouette(&frame, &format!("skinned ({technique:?})"));
 }
 
 #[test]
 fn back_layer_follows_morph_targets() {
-    let mut gpu = Gpu::new(&SceneSpec::new(camera()), plain_ao());
+    for technique in BACK_LAYER_DRAWS {
+        morphed_column(technique);
+    }
+}
+
+fn morphed_column(technique: AoTechnique) {
+    let mut gpu = Gpu::new(
+        &SceneSpec::new(camera()),
+        plain_ao().with_technique(technique),
+    );
     let mut mesh = column();
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
@@ -143,7 +165,7 @@ fn back_layer_follows_morph_targets() {
         Transform::IDENTITY,
     ));
     let frame = gpu.frame(6);
-    assert_same_bent_silhouette(&frame, "morphed");
+    assert_same_bent_silhouette(&frame, &format!("morphed ({technique:?})"));
 }
 
 fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
