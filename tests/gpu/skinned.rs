@@ -80,23 +80,27 @@ fn camera() -> Transform {
     Transform::from_xyz(0.0, 0.7, 2.2).looking_at(Vec3::new(0.2, 0.65, 0.0), Vec3::Y)
 }
 
-/// The two ways the back layer is drawn: with normals (the near field) and its depth alone, with
-/// a vertex stage of its own (the ray march, the default's technique).
-const BACK_LAYER_DRAWS: [AoTechnique; 2] = [AoTechnique::NearField, AoTechnique::RayMarch];
-
-#[test]
-fn back_layer_follows_the_skin() {
-    for technique in BACK_LAYER_DRAWS {
-        skinned_column(technique);
+/// Renders the column `spawn` adds under both ways the back layer is drawn, with normals (the
+/// near field) and its depth alone, with a vertex stage of its own (the ray march, the default's
+/// technique), and checks each frame with `assert_same_bent_silhouette`.
+fn under_both_back_layer_draws(what: &str, spawn: impl Fn(&mut World)) {
+    for technique in [AoTechnique::NearField, AoTechnique::RayMarch] {
+        let mut gpu = Gpu::new(
+            &SceneSpec::new(camera()),
+            plain_ao().with_technique(technique),
+        );
+        spawn(gpu.app.world_mut());
+        let frame = gpu.frame(6);
+        assert_same_bent_silhouette(&frame, &format!("{what} ({technique:?})"));
     }
 }
 
-fn skinned_column(technique: AoTechnique) {
-    let mut gpu = Gpu::new(
-        &SceneSpec::new(camera()),
-        plain_ao().with_technique(technique),
-    );
-    let world = gpu.app.world_mut();
+#[test]
+fn back_layer_follows_the_skin() {
+    under_both_back_layer_draws("skinned", spawn_skinned_column);
+}
+
+fn spawn_skinned_column(world: &mut World) {
     let bindposes = column_bindposes(world);
     let mesh = world.resource_mut::<Assets<Mesh>>().add(column());
     let material = world
@@ -119,22 +123,14 @@ fn skinned_column(technique: AoTechnique) {
         NoFrustumCulling,
         Transform::IDENTITY,
     ));
-    let frame = gpu.frame(6);
-    assert_same_bent_silhouette(&frame, &format!("skinned ({technique:?})"));
 }
 
 #[test]
 fn back_layer_follows_morph_targets() {
-    for technique in BACK_LAYER_DRAWS {
-        morphed_column(technique);
-    }
+    under_both_back_layer_draws("morphed", spawn_morphed_column);
 }
 
-fn morphed_column(technique: AoTechnique) {
-    let mut gpu = Gpu::new(
-        &SceneSpec::new(camera()),
-        plain_ao().with_technique(technique),
-    );
+fn spawn_morphed_column(world: &mut World) {
     let mut mesh = column();
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_INDEX);
     mesh.remove_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT);
@@ -152,7 +148,6 @@ fn morphed_column(technique: AoTechnique) {
         })
         .collect();
     mesh.set_morph_targets(target);
-    let world = gpu.app.world_mut();
     let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh);
     let material = world
         .resource_mut::<Assets<StandardMaterial>>()
@@ -164,8 +159,6 @@ fn morphed_column(technique: AoTechnique) {
         NoFrustumCulling,
         Transform::IDENTITY,
     ));
-    let frame = gpu.frame(6);
-    assert_same_bent_silhouette(&frame, &format!("morphed ({technique:?})"));
 }
 
 fn assert_same_bent_silhouette(frame: &Frame, what: &str) {
