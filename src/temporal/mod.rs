@@ -16,7 +16,9 @@
 //!   plane in the 5 × 5 texels around it (each texel's reverse-Z depth, which is affine across
 //!   the screen on a plane, off the plane by no more than 2 % of the pixel's linear depth would
 //!   move it; the plane's slope from the nearer neighbour along each axis): within
-//!   1.5 standard errors of that mean plus 0.05. An occluder that moves away without a motion vector
+//!   1.5 standard errors of that mean plus 0.05, the band reaching as far as the mean of the
+//!   window's texel pairs symmetric about the pixel where the plane ends inside the window (so a
+//!   converged edge keeps its own occlusion, not the plane's inside's). An occluder that moves away without a motion vector
 //!   on the receiver (a contact shadow on a still floor) leaves no trail; a history the clamp
 //!   moved by more than 0.03 counts as at most four frames, so the change settles quickly. The
 //!   image-space clamp runs on every other frame: it is there for changes the motion vectors miss,

@@ -193,32 +193,54 @@ fn depth_slope(local: vec2<i32>, d: f32) -> vec2<f32> {
 
 // Mean of this frame's values on the texel's plane in the window, give or take GAMMA standard
 // errors of it and CLAMP_MARGIN; `tolerance` is how far in reverse-Z depth a texel of the window
-// may lie off the plane. A background texel (depth 0) lies on no plane.
+// may lie off the plane. A background texel (depth 0) lies on no plane. At a plane's edge (a
+// fin's top, the rim of a panel line) the texels on the plane lie on one side of the texel, and
+// their mean is not its value: there the band reaches to the mean of the pairs of texels placed
+// symmetrically about it that both lie on the plane, which is its value wherever the occlusion
+// varies linearly across the window. Clamped to the one-sided mean alone, a converged history
+// at the edge was pulled toward the plane's inside (BENCHMARKS.md, "The clamp at a plane's
+// edge"); clamped to the pairs' mean alone, fewer texels made a noisier mean.
 fn mean_bounds(local: vec2<i32>, tolerance: f32) -> array<vec2<f32>, 2> {
     // The plane goes through the texel's depth as the tile holds it.
-    let d = tile_at(tile_index(local, vec2<i32>(0))).y;
+    let own = tile_at(tile_index(local, vec2<i32>(0)));
+    let d = own.y;
     let slope = depth_slope(local, d);
-    var sum = vec2<f32>(0.0);
-    var sum_sq = vec2<f32>(0.0);
-    var on_surface = 0.0;
-    for (var dy = -WINDOW; dy <= WINDOW; dy++) {
+    var sum = own.x;
+    var sum_sq = own.x * own.x;
+    var on_surface = 1.0;
+    var pairs_sum = own.x;
+    var pairs_count = 1.0;
+    // Half the window (the rows above the texel, and the texels left of it on its row), each
+    // with its mirror image.
+    for (var dy = -WINDOW; dy <= 0; dy++) {
         for (var dx = -WINDOW; dx <= WINDOW; dx++) {
-            let t = tile_at(tile_index(local, vec2<i32>(dx, dy)));
-            let predicted = d + dot(slope, vec2<f32>(f32(dx), f32(dy)));
-            if abs(t.y - predicted) > tolerance {
-                continue;
+            if dy == 0 && dx >= 0 {
+                break;
             }
-            let v = vec2<f32>(t.x, 0.0);
-            sum += v;
-            sum_sq += v * v;
-            on_surface += 1.0;
+            let offset = vec2<i32>(dx, dy);
+            let a = tile_at(tile_index(local, offset));
+            let b = tile_at(tile_index(local, -offset));
+            let step = dot(slope, vec2<f32>(offset));
+            let a_on = abs(a.y - (d + step)) <= tolerance;
+            let b_on = abs(b.y - (d - step)) <= tolerance;
+            let wa = select(0.0, 1.0, a_on);
+            let wb = select(0.0, 1.0, b_on);
+            sum += wa * a.x + wb * b.x;
+            sum_sq += wa * a.x * a.x + wb * b.x * b.x;
+            on_surface += wa + wb;
+            let both = wa * wb;
+            pairs_sum += both * (a.x + b.x);
+            pairs_count += 2.0 * both;
         }
     }
-    // The texel itself is always on its surface, so `on_surface` ≥ 1.
     let mean = sum / on_surface;
-    let sigma = sqrt(max(sum_sq / on_surface - mean * mean, vec2<f32>(0.0)));
-    let reach = GAMMA * sigma / sqrt(on_surface) + vec2<f32>(CLAMP_MARGIN);
-    return array<vec2<f32>, 2>(mean - reach, mean + reach);
+    let pairs_mean = pairs_sum / pairs_count;
+    let sigma = sqrt(max(sum_sq / on_surface - mean * mean, 0.0));
+    let reach = GAMMA * sigma / sqrt(on_surface) + CLAMP_MARGIN;
+    return array<vec2<f32>, 2>(
+        vec2<f32>(min(mean, pairs_mean) - reach, 0.0),
+        vec2<f32>(max(mean, pairs_mean) + reach, 0.0),
+    );
 }
 
 // For a texel the march skipped this frame and that has no history: the mean of this frame's

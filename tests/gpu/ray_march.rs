@@ -238,26 +238,27 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 /// a box and a thin wall just outside the view, every mesh a sphere occluder, at R = 0.75 m and
 /// 2 m. The default alone and joined to the spheres, with the thickness and with 0, against the
 /// CPU ray tracer: each ratio stays under its scene's bound, set just above what was measured;
-/// the walker joined to its spheres is the one case the thickness makes worse.
+/// the walker is the one scene the thickness makes worse (joined to its spheres, and alone at
+/// 0.75 m).
 /// The third-party scenes need `../shared/assets`.
 #[test]
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
     // joined, over both radii. Measured (0.75 m, 2 m; the default converged over 64 frames under
-    // its checkerboard): the walker 0.98×, 0.81× alone and 1.09×, 1.11× joined (its limbs are
+    // its checkerboard): the walker 1.05×, 0.77× alone and 1.19×, 1.13× joined (its limbs are
     // closed solids with air between them, which the thickness counts as solid); the box and the
     // wall outside the view 1.00× (the rays that would find them leave the screen); DamagedHelmet
-    // 0.88×, 0.91× and 0.94×, 0.94×; CesiumMan 0.87×, 0.83× and 0.93×, 0.99×; the Cornell box,
-    // walls of one polygon, 0.70×, 0.73× and 0.72×, 0.91×. Before the checkerboard the walker read
-    // 1.11×, 0.81× and 1.18×, 1.16× (1.02×, 0.75× and 1.10×, 1.11× while the temporal clamp ran
-    // every frame: the clamp's pull toward the window's mean, a blur, likely softens the
-    // thickness's excess between the limbs).
+    // 0.85×, 0.80× and 0.94×, 0.93×; CesiumMan 0.83×, 0.81× and 0.92×, 1.00×; the Cornell box,
+    // walls of one polygon, 0.70×, 0.72× and 0.72×, 0.91×. The walker read 0.98×, 0.81× and
+    // 1.09×, 1.11× while the temporal clamp pulled a plane's edge toward the plane's inside (a
+    // blur that softened the thickness's excess between the limbs; `temporal.wgsl`,
+    // `mean_bounds`), and 1.11×, 0.81× and 1.18×, 1.16× before the checkerboard.
     let bounds = [
-        ("walker on floor", 1.0, 1.13),
+        ("walker on floor", 1.06, 1.2),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
         ("DamagedHelmet on floor", 0.93, 0.96),
-        ("CesiumMan on floor", 0.88, 1.0),
+        ("CesiumMan on floor", 0.88, 1.01),
         ("CornellBox on floor", 0.75, 0.92),
     ];
     let shared = crate::models::shared_assets();

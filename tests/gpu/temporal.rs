@@ -167,8 +167,8 @@ fn an_occluder_that_moves_away_leaves_no_trail() {
 }
 
 /// The checkpoint of `an_occluder_that_moves_away_leaves_no_trail` for the default: 6 frames.
-/// Measured: 289, 65, 3 and 7 pixels of 2,781 after 2, 4, 6 and 8 frames (the near field: 30, 4,
-/// 4, 0 of 2,654).
+/// Measured: 263, 55, 7 and 8 pixels of 2,782 after 2, 4, 6 and 8 frames (the near field: 30, 5,
+/// 2, 0 of 2,654).
 const DEFAULT_TRAIL_CHECKPOINT: usize = 2;
 
 /// The default's checkerboard (each texel marched every other frame) converges, with twice the

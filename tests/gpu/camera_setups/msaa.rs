@@ -367,13 +367,14 @@ fn msaa_sees_through_an_alpha_masked_grille() {
         "alpha-masked grille, MSAA ×4 against no MSAA: RMSE {error:.4}, {grille_error:.4} over \
          the grille's pixels"
     );
-    // Measured 0.0033 overall and 0.0104 on the grille's pixels: a few pixels along the bars'
+    // Measured 0.0039 overall and 0.0123 on the grille's pixels: a few pixels along the bars'
     // sides and the rectangle's edges take another surface's normal, and the blur's fine-detail
     // term, which reads the depth beside each pixel, darkens them by another amount (0.0018 and
-    // 0.0055 before the term).
-    assert!(error <= 0.004, "MSAA against plain RMSE {error}");
+    // 0.0055 before the term; 0.0033 and 0.0104 while the temporal clamp pulled a plane's edge
+    // toward the plane's inside, which also evened out those pixels).
+    assert!(error <= 0.0042, "MSAA against plain RMSE {error}");
     assert!(
-        grille_error <= 0.012,
+        grille_error <= 0.013,
         "MSAA against plain RMSE {grille_error} on the grille"
     );
     let msaa_bars = covered(&msaa);
