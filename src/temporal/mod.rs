@@ -18,14 +18,14 @@
 //!   move it; the plane's slope from the nearer neighbour along each axis): within
 //!   1.5 standard errors of that mean plus 0.05, the band reaching as far as the mean of the
 //!   window's texel pairs symmetric about the pixel where the plane ends inside the window (so a
-//!   converged edge keeps its own occlusion, not the plane's inside's). An occluder that moves away without a motion vector
-//!   on the receiver (a contact shadow on a still floor) leaves no trail; a history the clamp
-//!   moved by more than 0.03 counts as at most four frames, so the change settles quickly. The
-//!   image-space clamp runs on every other frame: it is there for changes the motion vectors miss,
-//!   which it catches a frame later, not for noise, which the average removes; the frames between
-//!   skip its workgroup tile and window (BENCHMARKS.md, "The clamp every other frame"). The
-//!   voxel term keeps the range of its 3 × 3 neighbours widened by 0.05 (the mean biased it at
-//!   the voxel grid's steps), every frame.
+//!   converged edge keeps its own occlusion, not the plane's inside's). An occluder that moves
+//!   away without a motion vector on the receiver (a contact shadow on a still floor) leaves no
+//!   trail; a history the clamp moved by more than 0.03 counts as at most four frames, so the
+//!   change settles quickly. The image-space clamp runs on every other frame: it is there for
+//!   changes the motion vectors miss, which it catches a frame later, not for noise, which the
+//!   average removes; the frames between skip its workgroup tile and window (BENCHMARKS.md, "The
+//!   clamp every other frame"). The voxel term keeps the range of its 3 × 3 neighbours widened by
+//!   0.05 (the mean biased it at the voxel grid's steps), every frame.
 //! - **Average.** Running mean over at most [`AoTemporal::max_frames`] frames: the history keeps
 //!   its frame count, and each frame weighs 1 / count.
 //! - **Checkerboard.** The ray march by default marches one texel of two each frame

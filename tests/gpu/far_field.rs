@@ -221,10 +221,10 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// converged over 64 frames: at 0.75 m the walker's error falls by 4% with spheres and 2% with
 /// fields and holds with voxels (0.0245 against 0.0245; it rose by 4% while the temporal clamp
 /// pulled a plane's edge toward the plane's inside, by 2% when this test took 60 frames),
-/// CesiumMan's falls by 3–8%; at 2 m they fall by 12–26%. Before the ray march counted steps just behind the back-face layer as blocked
-/// the default alone was farther from the truth and the far field's share larger (7–19%, 11–15%,
-/// 27–44%); joined, CesiumMan's error has fallen since and the walker's risen by 8–10% (its limbs
-/// are closed solids with air between them). CesiumMan needs `../shared/assets`.
+/// CesiumMan's falls by 3–8%; at 2 m they fall by 12–26%. Before the ray march counted steps
+/// just behind the back-face layer as blocked the default alone was farther from the truth and
+/// the far field's share larger (7–19%, 11–15%, 27–44%); joined, CesiumMan's error has fallen
+/// since and the walker's risen by 8–10% (its limbs are closed solids with air between them). CesiumMan needs `../shared/assets`.
 #[test]
 fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
     let mut scenes = vec![(far_scenes::walker_on_floor(), None)];
