@@ -41,7 +41,7 @@
 //! hemisphere by the square of its elevation's sine. It is not from the papers: the ray march's
 //! steps, a sixth of R apart, step over grooves and creases a pixel or two wide, which the front
 //! layer holds (BENCHMARKS.md, "The blur restores fine detail").
-//! `reference::filter::fine_detail_sides` is the CPU twin.
+//! `reference::fine_detail::fine_detail_sides` is the CPU twin.
 //!
 //! On a view without far-field terms the last of these passes (the blur's Y pass, or the
 //! upsampling where the blur is off) writes the visibility Bevy's PBR reads itself, where compose

@@ -50,8 +50,10 @@ pub struct AoBlur {
     /// creases narrower than the ray march's steps are what the rays step over; this term
     /// restores them (BENCHMARKS.md, "The blur restores fine detail"). Under temporal
     /// accumulation the ray march adds it itself, one of the four sides a frame, and the history
-    /// averages the four (a sixteenth of the reads of all four sides a frame at full resolution);
-    /// without accumulation the blur's last pass adds all four, where the blur runs (`radius`
+    /// averages the four (a sixteenth of the reads of all four sides a frame at full resolution),
+    /// and at half resolution the upsampling adds it to the pixels between the march's texels
+    /// that lie below the surface those texels span, over the texels around them (a groove a
+    /// pixel wide that no texel shows); without accumulation the blur's last pass adds all four, where the blur runs (`radius`
     /// above 0). It applies to the ray march only (the other techniques sample the front layer
     /// near the pixel themselves). 0 turns it off. Units: pixels. Valid: 0 ..=
     /// [`AoBlur::MAX_DETAIL_REACH`]. Default: [`DEFAULT_BLUR_DETAIL_REACH`].

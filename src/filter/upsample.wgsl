@@ -15,14 +15,18 @@
 // occlusion: one read per texel instead of three, and no unprojection (the guide's normal is then
 // 8-bit). With WRITE_NORMALS it also copies each pixel's front-layer normal, as read, into
 // `blur_normals`, which the blur weighs by (`DynamicAoTextures::blur_normal`).
+// With GUIDE_TEXELS and the ray march's fine-detail term on, a pixel between texels that lies
+// below the surface they span also joins the term as the texels around it give it
+// (`sub_texel_detail`).
 // `reference::filter` is the CPU twin.
 
 #import bevy_render::view::View
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, position_in_view, position_at_linear_depth, linear_depth, pixel_world_size}
 #import bevy_dynamic_ao::uniform::DynamicAoUniform
 #import bevy_dynamic_ao::filter_output::store_filtered
-#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, screen_weight, plane_surface_weight}
+#import bevy_dynamic_ao::joint_upsample::{Guide, texel_guide, screen_weight, plane_surface_weight, normal_weight}
 #import bevy_dynamic_ao::history::unpack_history
+#import bevy_dynamic_ao::fine_detail::{with_fine_detail, rise, detail_reach_world}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<uniform> settings: DynamicAoUniform;
@@ -213,6 +217,99 @@ fn blended(quad: u32, x: Pixel, w: Window) -> vec2<f32> {
     return select(w.oo.value, sum.xy / sum.z, sum.z > 0.0);
 }
 
+#ifdef GUIDE_TEXELS
+// `highest` (the highest rise so far on each side of the pixel, +x, −x, +y, −y) with texel `t`,
+// `offset` pixels from pixel `x`, on the sides it lies on. Only texels whose normal agrees with
+// the pixel's count, weighted by w_n: a wall beside a floor rises above the floor's pixels, but
+// its occlusion is already in the floor's texels, whose own rays and term saw it.
+fn highest_with(
+    highest: vec4<f32>,
+    t: Texel,
+    offset: vec2<i32>,
+    x: Pixel,
+    reach_world: f32,
+) -> vec4<f32> {
+    if !t.guide.on_surface {
+        return highest;
+    }
+    let r = rise(t.guide.p - x.p, x.plane_n, reach_world) * normal_weight(t.guide, x.n);
+    let ahead = offset > vec2<i32>(0);
+    let behind = offset < vec2<i32>(0);
+    let sides = vec4<bool>(ahead.x, behind.x, ahead.y, behind.y);
+    return max(highest, select(vec4<f32>(0.0), vec4<f32>(r), sides));
+}
+
+// How far below the surface of its bracketing texels a pixel must lie, in its footprints, for
+// `sub_texel_detail` to count at all, and from how much deeper it counts in full.
+const SUNKEN_FROM: f32 = 0.1;
+const SUNKEN_RAMP: f32 = 0.4;
+
+// How far quad pixel `quad` (1–3) showing `x` lies below the surface its bracketing texels span
+// (their positions averaged as bilinear filtering weighs them), 0–1 (`SUNKEN_FROM`). A smooth
+// surface, curved or not, runs through its texels, and its pixels keep the blend of theirs; a
+// groove between them does not. Without this the term laid a grid over the bumpy ring's smooth
+// dimples, whose pixels between texels see the texels around them rise a little (BENCHMARKS.md,
+// "Grooves between the texels").
+fn sunken(x: Pixel, quad: u32, w: Window) -> f32 {
+    var spanned = w.oo.guide.p;
+    var on_surface = w.oo.guide.on_surface;
+    if quad == 1u {
+        spanned = 0.5 * (w.oo.guide.p + w.po.guide.p);
+        on_surface = on_surface && w.po.guide.on_surface;
+    } else if quad == 2u {
+        spanned = 0.5 * (w.oo.guide.p + w.op.guide.p);
+        on_surface = on_surface && w.op.guide.on_surface;
+    } else {
+        spanned = 0.25 * (w.oo.guide.p + w.po.guide.p + w.op.guide.p + w.pp.guide.p);
+        on_surface = on_surface && w.po.guide.on_surface && w.op.guide.on_surface
+            && w.pp.guide.on_surface;
+    }
+    let depth = dot(spanned - x.p, x.plane_n) / x.footprint;
+    return select(0.0, clamp((depth - SUNKEN_FROM) / SUNKEN_RAMP, 0.0, 1.0), on_surface);
+}
+
+// The fine-detail term (`shaders/fine_detail.wgsl`) of quad pixel `quad` (1–3) showing `x`, over
+// the texels `blend_sum` blends for it (those less than 2.5 pixels away) in place of its
+// full-resolution neighbours: the highest rise on each side, its square averaged over the four
+// sides. The texels hold the march's term at their
+// own pixels; a pixel between them, in a groove a pixel wide across a panel whose texels lie on
+// either side, took the panel's occlusion (BENCHMARKS.md, "Grooves between the texels").
+// `reference::fine_detail::sub_texel_detail` is the CPU twin.
+fn sub_texel_detail(x: Pixel, quad: u32, w: Window) -> f32 {
+    let reach = detail_reach_world(
+        i32(settings.march_detail_reach),
+        x.footprint,
+        settings.image_space_radius,
+    );
+    var highest = vec4<f32>(0.0);
+    switch quad {
+        case 1u: {
+            highest = highest_with(highest, w.oo, vec2<i32>(-1, 0), x, reach);
+            highest = highest_with(highest, w.po, vec2<i32>(1, 0), x, reach);
+            highest = highest_with(highest, w.om, vec2<i32>(-1, -2), x, reach);
+            highest = highest_with(highest, w.pm, vec2<i32>(1, -2), x, reach);
+            highest = highest_with(highest, w.op, vec2<i32>(-1, 2), x, reach);
+            highest = highest_with(highest, w.pp, vec2<i32>(1, 2), x, reach);
+        }
+        case 2u: {
+            highest = highest_with(highest, w.oo, vec2<i32>(0, -1), x, reach);
+            highest = highest_with(highest, w.op, vec2<i32>(0, 1), x, reach);
+            highest = highest_with(highest, w.mo, vec2<i32>(-2, -1), x, reach);
+            highest = highest_with(highest, w.mp, vec2<i32>(-2, 1), x, reach);
+            highest = highest_with(highest, w.po, vec2<i32>(2, -1), x, reach);
+            highest = highest_with(highest, w.pp, vec2<i32>(2, 1), x, reach);
+        }
+        default: {
+            highest = highest_with(highest, w.oo, vec2<i32>(-1, -1), x, reach);
+            highest = highest_with(highest, w.po, vec2<i32>(1, -1), x, reach);
+            highest = highest_with(highest, w.op, vec2<i32>(-1, 1), x, reach);
+            highest = highest_with(highest, w.pp, vec2<i32>(1, 1), x, reach);
+        }
+    }
+    return dot(highest, highest) * 0.25;
+}
+#endif
+
 // Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`. One store
 // whatever the pixel: lavapipe runs every branch under a mask, so a store in each branch costs
 // every pixel (BENCHMARKS.md, "Workgroups along rows").
@@ -224,7 +321,14 @@ fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     var encoded = vec3<f32>(0.0);
     if depth > 0.0 {
         encoded = textureLoad(normal_texture, x, 0).xyz;
-        value = blended(quad, pixel_at(x, dims, depth, decode_normal(encoded)), w);
+        let px = pixel_at(x, dims, depth, decode_normal(encoded));
+        value = blended(quad, px, w);
+#ifdef GUIDE_TEXELS
+        if settings.march_detail_reach > 0u {
+            let detail = sub_texel_detail(px, quad, w) * sunken(px, quad, w);
+            value.x = with_fine_detail(value.x, detail, settings.intensity);
+        }
+#endif
     }
     store(x, value, encoded);
 }

@@ -1,6 +1,6 @@
 //! The cross-bilateral blur on the CPU, step for step as `filter/blur.wgsl` computes it.
 
-use bevy::math::{IVec2, Vec4};
+use bevy::math::Vec4;
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::filter::settings::AoBlur;
@@ -22,11 +22,11 @@ pub fn wendland(t: f32, h: f32) -> f32 {
 
 /// Full-resolution pixels within which `filter/upsample.wgsl` blends a texel: w_d of the texels
 /// of the window farther away is under 0.03, and the shader skips them.
-const UPSAMPLE_REACH: f32 = 2.5;
+pub(super) const UPSAMPLE_REACH: f32 = 2.5;
 
 /// Support of the upsampling's normal weight over 1 − cos of the angle between the normals
 /// (`NORMAL_SUPPORT` in `shaders/joint_upsample.wgsl`, which says why).
-const UPSAMPLE_NORMAL_SUPPORT: f32 = 1.5;
+pub(super) const UPSAMPLE_NORMAL_SUPPORT: f32 = 1.5;
 
 /// Support of the upsampling's plane weight over a texel's distance from the pixel's tangent
 /// plane, in the pixel's footprints (`PLANE_SUPPORT` in `shaders/joint_upsample.wgsl`, which
@@ -35,7 +35,7 @@ const UPSAMPLE_PLANE_SUPPORT: f32 = 2.0;
 
 /// The texels `filter/upsample.wgsl` blends for a pixel (those within [`UPSAMPLE_REACH`]), as
 /// offsets from the pixel's own texel.
-const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
+pub(super) const UPSAMPLE_WINDOW: [(i32, i32); 9] = [
     (0, 0),
     (-1, -1),
     (0, -1),
@@ -181,91 +181,15 @@ fn blur_pass(
     out
 }
 
-/// The fine-detail term's sides, in the order `shaders/fine_detail.wgsl` numbers them.
-pub const FINE_DETAIL_SIDES: [IVec2; 4] = [IVec2::X, IVec2::NEG_X, IVec2::Y, IVec2::NEG_Y];
-
-/// The fine-detail term ([`AoBlur::detail_reach`], `fine_detail` in `shaders/fine_detail.wgsl`)
-/// as the blur's Y pass adds it: [`fine_detail_sides`] over all four sides.
-pub fn fine_detail(nd: &NdBuffer, view: &ViewMatrices, reach: u32, radius: f32) -> Vec<f32> {
-    fine_detail_sides(nd, view, reach, radius, &FINE_DETAIL_SIDES)
-}
-
-/// The fine-detail term over `sides` (of [`FINE_DETAIL_SIDES`]; the ray march adds one a frame
-/// under accumulation): for each receiver of the front layer, the occlusion of the surfaces
-/// within `reach` pixels along each side, the highest as a horizon (the sine of its elevation
-/// above the tangent plane, falling to nothing at the reach's world size or at `radius`,
-/// metres), the squares of the sides' sines averaged. 0 on the background.
-pub fn fine_detail_sides(
-    nd: &NdBuffer,
-    view: &ViewMatrices,
-    reach: u32,
-    radius: f32,
-    sides: &[IVec2],
-) -> Vec<f32> {
-    let reach_pixels = reach as i32;
-    nd.per_receiver(view, |r| {
-        let p = r.view_position;
-        let footprint = view.pixel_world_size(-p.z, nd.height);
-        let reach_world = ((reach as f32 + 0.5) * footprint).min(radius);
-        let mut occlusion = 0.0;
-        for &side in sides {
-            let mut highest = 0.0f32;
-            for k in 1..=reach_pixels {
-                let q = r.pixel + side * k;
-                let Some(texel) = nd.texel(false, q.x, q.y) else {
-                    break;
-                };
-                if texel.depth <= 0.0 {
-                    continue;
-                }
-                let v = view.view_position(q.x, q.y, nd.width, nd.height, texel.depth) - p;
-                let distance = v.length();
-                if distance <= 0.0 || distance >= reach_world {
-                    continue;
-                }
-                let t = distance / reach_world;
-                highest = highest.max(v.dot(r.view_normal) / distance * (1.0 - t * t));
-            }
-            occlusion += highest * highest;
-        }
-        occlusion / sides.len() as f32
-    })
-}
-
-/// `occlusion` (row-major, the size of `nd`) with the fine-detail term of `reach` pixels
-/// multiplied in, as the blur's Y pass does for the ray march: 1 − (1 − occlusion)(1 − min(
-/// intensity · detail, 1)).
-pub fn with_fine_detail(
-    occlusion: &[f32],
-    nd: &NdBuffer,
-    view: &ViewMatrices,
-    reach: u32,
-    radius: f32,
-    intensity: f32,
-) -> Vec<f32> {
-    occlusion
-        .iter()
-        .zip(fine_detail(nd, view, reach, radius))
-        .map(|(o, d)| join_fine_detail(*o, d, intensity))
-        .collect()
-}
-
-/// `occlusion` with the fine-detail term `detail` (scaled by `intensity`) joined as an
-/// independent occluder, 1 − (1 − occlusion)(1 − min(intensity · detail, 1)): `with_fine_detail`
-/// in `shaders/fine_detail.wgsl`.
-pub fn join_fine_detail(occlusion: f32, detail: f32, intensity: f32) -> f32 {
-    1.0 - (1.0 - occlusion) * (1.0 - (intensity * detail).min(1.0))
-}
-
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::reference::nd_buffer::NdTexel;
     use bevy::math::{Mat4, Vec3};
 
     /// A `w` × `h` view of two planes facing the camera, without back faces: pixel columns where
     /// `near` holds show the one `near_z` metres away, the others the one `far_z` metres away.
-    fn two_planes(
+    pub(in crate::reference) fn two_planes(
         (w, h): (u32, u32),
         near: impl Fn(u32) -> bool,
         near_z: f32,
@@ -293,7 +217,7 @@ mod tests {
 
     /// A vertical depth edge: the left half is a near surface in a dark crease, the right half a
     /// far, open surface.
-    fn step_edge() -> (Vec<f32>, NdBuffer, ViewMatrices) {
+    pub(in crate::reference) fn step_edge() -> (Vec<f32>, NdBuffer, ViewMatrices) {
         let (w, h) = (32u32, 8u32);
         let near = |x: u32| x < w / 2;
         let (nd, view) = two_planes((w, h), near, 1.0, 4.0);
@@ -422,34 +346,5 @@ mod tests {
             cross_bilateral_blur(&occlusion, &nd, &view, &AoBlur::OFF),
             occlusion
         );
-    }
-
-    #[test]
-    fn fine_detail_sees_only_what_rises_above_the_tangent_plane() {
-        // A step 3 cm deep instead of 3 m, so the near half lies within the term's reach.
-        let (_, mut nd, view) = step_edge();
-        let (w, h) = (nd.width, nd.height);
-        for i in 0..(w * h) as usize {
-            let x = i as u32 % w;
-            nd.front[i].depth = 0.1 / if x < w / 2 { 1.0 } else { 1.03 };
-        }
-        let detail = fine_detail(&nd, &view, 6, 10.0);
-        let at = |x: u32| detail[(h / 2 * w + x) as usize];
-        // Flat, facing the camera: every neighbour lies in the tangent plane.
-        assert_eq!(at(2), 0.0);
-        assert_eq!(at(w - 3), 0.0);
-        // The near side of the step sees the far side below its tangent plane.
-        assert_eq!(at(w / 2 - 1), 0.0);
-        // Beside the step, on the far side, the near side rises above it: one side of four.
-        let first = at(w / 2);
-        assert!(first > 0.005 && first < 0.25, "{first}");
-        // Further off, the step is lower in the sky and then out of reach.
-        assert!(at(w / 2 + 2) < first);
-        assert_eq!(at(w / 2 + 7), 0.0);
-        // Within R only: a reach cut to 1 cm leaves nothing.
-        assert!(fine_detail(&nd, &view, 6, 0.01).iter().all(|d| *d == 0.0));
-        let darker = with_fine_detail(&vec![0.5; detail.len()], &nd, &view, 6, 10.0, 1.0);
-        let i = (h / 2 * w + w / 2) as usize;
-        assert!((darker[i] - (1.0 - 0.5 * (1.0 - first))).abs() < 1e-6);
     }
 }

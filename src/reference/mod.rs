@@ -8,6 +8,8 @@
 //! - [`fields`]: AO field occlusion exactly as `fields/fields.wgsl` evaluates it.
 //! - [`spheres`]: the far field of sphere occluders exactly as `spheres/splat.wgsl` adds it.
 //! - [`filter`]: the cross-bilateral blur exactly as `filter/blur.wgsl` runs it.
+//! - [`fine_detail`]: the fine-detail term exactly as the ray march, the blur and the upsampling
+//!   add it.
 //! - [`crate::geometry`] holds the triangles, BVH, hash and cap occlusion these share with the
 //!   plugin.
 //! - [`posed`]: the triangles a Bevy world draws this frame, skinned and morphed meshes posed.
@@ -18,6 +20,7 @@
 
 pub mod fields;
 pub mod filter;
+pub mod fine_detail;
 pub mod ground_truth;
 pub mod horizon;
 pub mod metrics;

@@ -1,6 +1,6 @@
 // The fine-detail term (`AoBlur::detail_reach`), joined with the ray march's occlusion: by the
 // ray march itself under temporal accumulation (one side a frame), else by the blur's Y pass
-// (all four sides). `reference::filter::fine_detail_sides` is the CPU twin.
+// (all four sides). `reference::fine_detail::fine_detail_sides` is the CPU twin.
 
 #define_import_path bevy_dynamic_ao::fine_detail
 
@@ -34,7 +34,7 @@ fn fine_detail(
     let n = normalize((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz);
     let p = position_in_view(view, (vec2<f32>(pixel) + 0.5) / size, depth_here);
     let footprint = pixel_world_size(view, -p.z, size.y);
-    let reach_world = min((f32(reach) + 0.5) * footprint, radius);
+    let reach_world = detail_reach_world(reach, footprint, radius);
     var occlusion = 0.0;
     for (var side = first_side; side < first_side + side_count; side++) {
         // The side's direction without an array: CPU rasterizers spill arrays indexed at run
@@ -52,16 +52,29 @@ fn fine_detail(
             }
             let q_uv = (vec2<f32>(q) + 0.5) / size;
             let v = position_at_linear_depth(view, q_uv, linear_depth(view, d)) - p;
-            let distance = length(v);
-            if distance <= 0.0 || distance >= reach_world {
-                continue;
-            }
-            let t = distance / reach_world;
-            highest = max(highest, dot(v, n) / distance * (1.0 - t * t));
+            highest = max(highest, rise(v, n, reach_world));
         }
         occlusion += highest * highest;
     }
     return occlusion / f32(side_count);
+}
+
+// The reach of the term in metres for a pixel `footprint` metres wide: `reach` pixels and a half,
+// at most `radius`.
+fn detail_reach_world(reach: i32, footprint: f32, radius: f32) -> f32 {
+    return min((f32(reach) + 0.5) * footprint, radius);
+}
+
+// How far a surface point at `v` from the pixel (metres, in the space of the pixel's unit normal
+// `n`) rises above the pixel's tangent plane, as the term counts it: the sine of its elevation,
+// falling to nothing at `reach_world` metres (negative below the plane; 0 at or past the reach).
+fn rise(v: vec3<f32>, n: vec3<f32>, reach_world: f32) -> f32 {
+    let distance = length(v);
+    if distance <= 0.0 || distance >= reach_world {
+        return 0.0;
+    }
+    let t = distance / reach_world;
+    return dot(v, n) / distance * (1.0 - t * t);
 }
 
 // `occlusion` with the fine-detail term `detail` (scaled by `intensity`) joined as an independent
