@@ -251,7 +251,7 @@ const SUNKEN_RAMP: f32 = 0.4;
 // dimples, whose pixels between texels see the texels around them rise a little (BENCHMARKS.md,
 // "Grooves between the texels").
 fn sunken(x: Pixel, quad: u32, w: Window) -> f32 {
-    var spanned = w.oo.guide.p;
+    var spanned: vec3<f32>;
     var on_surface = w.oo.guide.on_surface;
     if quad == 1u {
         spanned = 0.5 * (w.oo.guide.p + w.po.guide.p);
@@ -271,9 +271,9 @@ fn sunken(x: Pixel, quad: u32, w: Window) -> f32 {
 // The fine-detail term (`shaders/fine_detail.wgsl`) of quad pixel `quad` (1–3) showing `x`, over
 // the texels `blend_sum` blends for it (those less than 2.5 pixels away) in place of its
 // full-resolution neighbours: the highest rise on each side, its square averaged over the four
-// sides. The texels hold the march's term at their
-// own pixels; a pixel between them, in a groove a pixel wide across a panel whose texels lie on
-// either side, took the panel's occlusion (BENCHMARKS.md, "Grooves between the texels").
+// sides. The texels hold the march's term at their own pixels; a pixel between them, in a groove
+// a pixel wide across a panel whose texels lie on either side, took the panel's occlusion
+// (BENCHMARKS.md, "Grooves between the texels").
 // `reference::fine_detail::sub_texel_detail` is the CPU twin.
 fn sub_texel_detail(x: Pixel, quad: u32, w: Window) -> f32 {
     let reach = detail_reach_world(
