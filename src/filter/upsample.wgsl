@@ -5,7 +5,7 @@
 // world distance: `plane_surface_weight`), without the paper's AO difference (`weight`).
 // One invocation upsamples the 2 × 2 pixels of one texel, reading the texels of the 3 × 3 around
 // it once for the four (their depth, normal, position and value), and each pixel blends those
-// within 2.5 pixels of it (`blend_sum`). They reach past the 2 × 2 that bracket the pixel, and
+// within 2.5 pixels of it (`gather_quad`). They reach past the 2 × 2 that bracket the pixel, and
 // average the accumulated noise over a wider footprint where the guides agree (converged
 // high-frequency error 9–13% lower on flat scenes, none higher on DamagedHelmet; BENCHMARKS.md,
 // "The default runs no blur"). The quad's first pixel is the texel's own. With VISIBILITY it
@@ -135,7 +135,7 @@ fn weight(t: Texel, screen: f32, x: Pixel) -> f32 {
 
 // The texels around one texel `oo` that a pixel of its quad blends, named by their offsets
 // (m = −1, o = 0, p = +1; x first). The corner (−1, −1) lies 2.8 pixels or more from all four
-// pixels and counts for none (see `blend_sum`). No arrays: CPU rasterizers spill those to
+// pixels and counts for none (see `gather_quad`). No arrays: CPU rasterizers spill those to
 // memory.
 struct Window {
     om: Texel,
@@ -148,97 +148,83 @@ struct Window {
     pp: Texel,
 }
 
-// `sum` (the weighted channels, and the weights in z) with texel `t` added at screen weight
-// `screen`.
-fn add(sum: vec3<f32>, t: Texel, screen: f32, x: Pixel) -> vec3<f32> {
-    let w = weight(t, screen, x);
-    return sum + vec3<f32>(w * t.value, w);
+// What a quad pixel gathers from the texels of its window: the weighted channels with the weights
+// in z, and the highest rise on each side of the pixel (+x, −x, +y, −y) for the fine-detail term
+// between the texels (`sub_texel_detail`; zero where it is not gathered).
+struct Gathered {
+    sum: vec3<f32>,
+    highest: vec4<f32>,
 }
 
-// The weighted sum for a pixel beside the quad's own texel `own` (right of it or below it): the
-// two texels on its axis, `own` and `next`, lie 1 pixel away, the four others, `a` to `d`, √5 (a
-// knight's move).
-fn beside_sum(
-    x: Pixel,
-    own: Texel,
-    next: Texel,
-    a: Texel,
-    b: Texel,
-    c: Texel,
-    d: Texel,
-) -> vec3<f32> {
-    let one = screen_weight(1.0);
-    let knight = screen_weight(sqrt(5.0));
-    var sum = add(vec3<f32>(0.0), own, one, x);
-    sum = add(sum, next, one, x);
-    sum = add(sum, a, knight, x);
-    sum = add(sum, b, knight, x);
-    sum = add(sum, c, knight, x);
-    return add(sum, d, knight, x);
+// `g` with texel `t`, `offset` full-resolution pixels from the pixel `x`, added: its weight, w_d
+// of the offset's length times the surface terms, and where `reach_world` (metres) is above 0 its
+// rise on the sides it lies on. Only texels whose normal agrees with the pixel's rise, weighted by
+// w_n: a wall beside a floor rises above the floor's pixels, but its occlusion is already in the
+// floor's texels, whose own rays and term saw it.
+fn gather(g: Gathered, t: Texel, offset: vec2<i32>, x: Pixel, reach_world: f32) -> Gathered {
+    let w = weight(t, screen_weight(length(vec2<f32>(offset))), x);
+    var out = Gathered(g.sum + vec3<f32>(w * t.value, w), g.highest);
+#ifdef GUIDE_TEXELS
+    if reach_world > 0.0 && t.guide.on_surface {
+        let r = rise(t.guide.p - x.p, x.plane_n, reach_world) * normal_weight(t.guide, x.n);
+        let ahead = offset > vec2<i32>(0);
+        let behind = offset < vec2<i32>(0);
+        let sides = vec4<bool>(ahead.x, behind.x, ahead.y, behind.y);
+        out.highest = max(out.highest, select(vec4<f32>(0.0), vec4<f32>(r), sides));
+    }
+#endif
+    return out;
 }
 
-// The weighted sum (channels, and the weights in z) for quad pixel `quad` (0 the texel's own,
-// 1 right of it, 2 below, 3 diagonal), showing the surface `x`. Each pixel
-// blends the texels less than 2.5 pixels away (5, 6, 6 and 4 of the 3 × 3): w_d of those farther
-// is under 0.03, against 0.4–1 for the nearest, and skipping them spares 15 of 36 weights a quad.
+// What quad pixel `quad` (0 the texel's own, 1 right of it, 2 below, 3 diagonal), showing the
+// surface `x`, gathers (`gather`): the texels less than 2.5 pixels away (5, 6, 6 and 4 of the
+// 3 × 3), each named once with its offset from the pixel. w_d of those farther is under 0.03,
+// against 0.4–1 for the nearest, and skipping them spares 15 of 36 weights a quad. The rises are
+// gathered over the same texels, for pixels 1–3 only, and only where `reach_world` is above 0.
 // `reference::filter` adds the same texels in another order, which moves the last bits only.
-fn blend_sum(quad: u32, x: Pixel, w: Window) -> vec3<f32> {
-    var sum = vec3<f32>(0.0);
+fn gather_quad(quad: u32, x: Pixel, w: Window, reach_world: f32) -> Gathered {
+    var g = Gathered(vec3<f32>(0.0), vec4<f32>(0.0));
     switch quad {
         case 0u: {
-            let two = screen_weight(2.0);
-            sum = add(sum, w.oo, 1.0, x);
-            sum = add(sum, w.om, two, x);
-            sum = add(sum, w.mo, two, x);
-            sum = add(sum, w.po, two, x);
-            sum = add(sum, w.op, two, x);
+            g = gather(g, w.oo, vec2<i32>(0, 0), x, 0.0);
+            g = gather(g, w.om, vec2<i32>(0, -2), x, 0.0);
+            g = gather(g, w.mo, vec2<i32>(-2, 0), x, 0.0);
+            g = gather(g, w.po, vec2<i32>(2, 0), x, 0.0);
+            g = gather(g, w.op, vec2<i32>(0, 2), x, 0.0);
         }
         case 1u: {
-            sum = beside_sum(x, w.oo, w.po, w.om, w.pm, w.op, w.pp);
+            g = gather(g, w.oo, vec2<i32>(-1, 0), x, reach_world);
+            g = gather(g, w.po, vec2<i32>(1, 0), x, reach_world);
+            g = gather(g, w.om, vec2<i32>(-1, -2), x, reach_world);
+            g = gather(g, w.pm, vec2<i32>(1, -2), x, reach_world);
+            g = gather(g, w.op, vec2<i32>(-1, 2), x, reach_world);
+            g = gather(g, w.pp, vec2<i32>(1, 2), x, reach_world);
         }
         case 2u: {
-            sum = beside_sum(x, w.oo, w.op, w.mo, w.mp, w.po, w.pp);
+            g = gather(g, w.oo, vec2<i32>(0, -1), x, reach_world);
+            g = gather(g, w.op, vec2<i32>(0, 1), x, reach_world);
+            g = gather(g, w.mo, vec2<i32>(-2, -1), x, reach_world);
+            g = gather(g, w.mp, vec2<i32>(-2, 1), x, reach_world);
+            g = gather(g, w.po, vec2<i32>(2, -1), x, reach_world);
+            g = gather(g, w.pp, vec2<i32>(2, 1), x, reach_world);
         }
         default: {
-            let diagonal = screen_weight(sqrt(2.0));
-            sum = add(sum, w.oo, diagonal, x);
-            sum = add(sum, w.po, diagonal, x);
-            sum = add(sum, w.op, diagonal, x);
-            sum = add(sum, w.pp, diagonal, x);
+            g = gather(g, w.oo, vec2<i32>(-1, -1), x, reach_world);
+            g = gather(g, w.po, vec2<i32>(1, -1), x, reach_world);
+            g = gather(g, w.op, vec2<i32>(-1, 1), x, reach_world);
+            g = gather(g, w.pp, vec2<i32>(1, 1), x, reach_world);
         }
     }
-    return sum;
+    return g;
 }
 
-// The blended channels of quad pixel `quad` (`blend_sum`) showing `x`, or the quad's own
-// texel's where no texel of the window lies on its surface.
-fn blended(quad: u32, x: Pixel, w: Window) -> vec2<f32> {
-    let sum = blend_sum(quad, x, w);
-    return select(w.oo.value, sum.xy / sum.z, sum.z > 0.0);
+// The blended channels of `g`, or the quad's own texel's where no texel of the window `w` lies on
+// the pixel's surface.
+fn blended(g: Gathered, w: Window) -> vec2<f32> {
+    return select(w.oo.value, g.sum.xy / g.sum.z, g.sum.z > 0.0);
 }
 
 #ifdef GUIDE_TEXELS
-// `highest` (the highest rise so far on each side of the pixel, +x, −x, +y, −y) with texel `t`,
-// `offset` pixels from pixel `x`, on the sides it lies on. Only texels whose normal agrees with
-// the pixel's count, weighted by w_n: a wall beside a floor rises above the floor's pixels, but
-// its occlusion is already in the floor's texels, whose own rays and term saw it.
-fn highest_with(
-    highest: vec4<f32>,
-    t: Texel,
-    offset: vec2<i32>,
-    x: Pixel,
-    reach_world: f32,
-) -> vec4<f32> {
-    if !t.guide.on_surface {
-        return highest;
-    }
-    let r = rise(t.guide.p - x.p, x.plane_n, reach_world) * normal_weight(t.guide, x.n);
-    let ahead = offset > vec2<i32>(0);
-    let behind = offset < vec2<i32>(0);
-    let sides = vec4<bool>(ahead.x, behind.x, ahead.y, behind.y);
-    return max(highest, select(vec4<f32>(0.0), vec4<f32>(r), sides));
-}
-
 // How far below the surface of its bracketing texels a pixel must lie, in its footprints, for
 // `sub_texel_detail` to count at all, and from how much deeper it counts in full.
 const SUNKEN_FROM: f32 = 0.1;
@@ -268,51 +254,20 @@ fn sunken(x: Pixel, quad: u32, w: Window) -> f32 {
     return select(0.0, clamp((depth - SUNKEN_FROM) / SUNKEN_RAMP, 0.0, 1.0), on_surface);
 }
 
-// The fine-detail term (`shaders/fine_detail.wgsl`) of quad pixel `quad` (1–3) showing `x`, over
-// the texels `blend_sum` blends for it (those less than 2.5 pixels away) in place of its
-// full-resolution neighbours: the highest rise on each side, its square averaged over the four
-// sides. The texels hold the march's term at their own pixels; a pixel between them, in a groove
-// a pixel wide across a panel whose texels lie on either side, took the panel's occlusion
-// (BENCHMARKS.md, "Grooves between the texels").
+// The fine-detail term (`shaders/fine_detail.wgsl`) of a quad pixel 1–3 from the highest rises
+// `gather_quad` found on its sides among the texels it blends, in place of its full-resolution
+// neighbours: their squares averaged over the four sides. The texels hold the march's term at
+// their own pixels; a pixel between them, in a groove a pixel wide across a panel whose texels
+// lie on either side, took the panel's occlusion (BENCHMARKS.md, "Grooves between the texels").
 // `reference::fine_detail::sub_texel_detail` is the CPU twin.
-fn sub_texel_detail(x: Pixel, quad: u32, w: Window) -> f32 {
-    let reach = detail_reach_world(
-        i32(settings.march_detail_reach),
-        x.footprint,
-        settings.image_space_radius,
-    );
-    var highest = vec4<f32>(0.0);
-    switch quad {
-        case 1u: {
-            highest = highest_with(highest, w.oo, vec2<i32>(-1, 0), x, reach);
-            highest = highest_with(highest, w.po, vec2<i32>(1, 0), x, reach);
-            highest = highest_with(highest, w.om, vec2<i32>(-1, -2), x, reach);
-            highest = highest_with(highest, w.pm, vec2<i32>(1, -2), x, reach);
-            highest = highest_with(highest, w.op, vec2<i32>(-1, 2), x, reach);
-            highest = highest_with(highest, w.pp, vec2<i32>(1, 2), x, reach);
-        }
-        case 2u: {
-            highest = highest_with(highest, w.oo, vec2<i32>(0, -1), x, reach);
-            highest = highest_with(highest, w.op, vec2<i32>(0, 1), x, reach);
-            highest = highest_with(highest, w.mo, vec2<i32>(-2, -1), x, reach);
-            highest = highest_with(highest, w.mp, vec2<i32>(-2, 1), x, reach);
-            highest = highest_with(highest, w.po, vec2<i32>(2, -1), x, reach);
-            highest = highest_with(highest, w.pp, vec2<i32>(2, 1), x, reach);
-        }
-        default: {
-            highest = highest_with(highest, w.oo, vec2<i32>(-1, -1), x, reach);
-            highest = highest_with(highest, w.po, vec2<i32>(1, -1), x, reach);
-            highest = highest_with(highest, w.op, vec2<i32>(-1, 1), x, reach);
-            highest = highest_with(highest, w.pp, vec2<i32>(1, 1), x, reach);
-        }
-    }
-    return dot(highest, highest) * 0.25;
+fn sub_texel_detail(g: Gathered) -> f32 {
+    return dot(g.highest, g.highest) * 0.25;
 }
 #endif
 
-// Quad pixel `quad` (`blend_sum`), pixel `x` at `depth`, blended from the window `w`. One store
-// whatever the pixel: lavapipe runs every branch under a mask, so a store in each branch costs
-// every pixel (BENCHMARKS.md, "Workgroups along rows").
+// Quad pixel `quad` (1–3, `gather_quad`), pixel `x` at `depth`, blended from the window `w`. One
+// store whatever the pixel: lavapipe runs every branch under a mask, so a store in each branch
+// costs every pixel (BENCHMARKS.md, "Workgroups along rows").
 fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     if any(x >= dims) {
         return;
@@ -322,10 +277,21 @@ fn blend(x: vec2<i32>, quad: u32, dims: vec2<i32>, depth: f32, w: Window) {
     if depth > 0.0 {
         encoded = textureLoad(normal_texture, x, 0).xyz;
         let px = pixel_at(x, dims, depth, decode_normal(encoded));
-        value = blended(quad, px, w);
+        var reach_world = 0.0;
 #ifdef GUIDE_TEXELS
         if settings.march_detail_reach > 0u {
-            let detail = sub_texel_detail(px, quad, w) * sunken(px, quad, w);
+            reach_world = detail_reach_world(
+                i32(settings.march_detail_reach),
+                px.footprint,
+                settings.image_space_radius,
+            );
+        }
+#endif
+        let g = gather_quad(quad, px, w, reach_world);
+        value = blended(g, w);
+#ifdef GUIDE_TEXELS
+        if reach_world > 0.0 {
+            let detail = sub_texel_detail(g) * sunken(px, quad, w);
             value.x = with_fine_detail(value.x, detail, settings.intensity);
         }
 #endif
@@ -361,7 +327,7 @@ fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
         // The guide's own normal may be the history's 8-bit one; the blur gets the layer's.
         encoded = textureLoad(normal_texture, x, 0).xyz;
 #endif
-        value = blended(0u, own_pixel(w.oo.guide, x, dims), w);
+        value = blended(gather_quad(0u, own_pixel(w.oo.guide, x, dims), w, 0.0), w);
     }
     store(x, value, encoded);
     let x1 = x + vec2<i32>(1, 0);
