@@ -158,8 +158,8 @@ struct Gathered {
 
 // `g` with texel `t`, `offset` full-resolution pixels from the pixel `x`, added: its weight, w_d
 // of the offset's length times the surface terms, and where `reach_world` (metres) is above 0 its
-// rise on the sides it lies on. Only texels whose normal agrees with the pixel's rise, weighted by
-// w_n: a wall beside a floor rises above the floor's pixels, but its occlusion is already in the
+// rise on the sides it lies on. The rise is weighted by w_n, so only texels facing the pixel's way
+// count: a wall beside a floor rises above the floor's pixels, but its occlusion is already in the
 // floor's texels, whose own rays and term saw it.
 fn gather(g: Gathered, t: Texel, offset: vec2<i32>, x: Pixel, reach_world: f32) -> Gathered {
     let w = weight(t, screen_weight(length(vec2<f32>(offset))), x);
