@@ -77,6 +77,10 @@ use options::{FarTerm, Options};
 /// come back a few frames late).
 const TIMING_WARMUP_FRAMES: u32 = 8;
 
+/// Frames after the read-back began that `--timings` waits at most for the AO passes' spans of
+/// the frames `--frames` counts (an adapter without timestamp queries never sends them).
+const TIMING_WAIT_FRAMES: u32 = 30;
+
 /// Frames after the scene is ready by which the plugin has looked at every `AoField` occluder:
 /// from then on one with neither an active nor a pending field casts none (its bake failed, and
 /// the plugin said why), and the capture does not wait for it.
@@ -138,7 +142,6 @@ fn main() {
         failure: None,
         volume: None,
         stage_start: 0,
-        counting: false,
         placing: None,
         started: Instant::now(),
         truth_line: None,
@@ -166,8 +169,16 @@ fn main() {
 #[derive(PartialEq, Eq, Debug, Clone, Copy)]
 enum Stage {
     Loading,
-    Rendering { until: u32 },
-    Reading,
+    /// The scene is in the world. `until`: the frame the capture is read back, set once the
+    /// scene, fields and volume are ready and the `--frames` count begins (`None` before: the
+    /// frames until then show Bevy's SSAO standing in, or nothing yet).
+    Rendering {
+        until: Option<u32>,
+    },
+    /// The capture is being read back; `since`: the frame the read-back began.
+    Reading {
+        since: u32,
+    },
 }
 
 #[derive(Resource)]
@@ -189,10 +200,6 @@ struct Capture {
     volume: Option<Entity>,
     /// The frame rendering began.
     stage_start: u32,
-    /// Whether the frames counted by `--frames` have begun: from the first frame the scene is
-    /// ready, with the AO's history started over there (where it accumulates), so that every
-    /// capture of a view accumulates the same frames.
-    counting: bool,
     /// The read-back of the front ND layer the voxel volume is placed from, while it runs.
     placing: Option<Arc<Mutex<Option<Vec<u8>>>>>,
     /// When the run began.
@@ -235,10 +242,12 @@ fn drive(
     if !ready && let Some(store) = diagnostics.as_deref_mut() {
         timings::forget(store);
     }
-    if ready && !capture.counting && matches!(capture.stage, Stage::Rendering { .. }) {
-        capture.counting = true;
+    // The frames `--frames` counts begin on the first frame the scene is ready, with the AO's
+    // history started over there (where it accumulates), so that every capture of a view
+    // accumulates the same frames.
+    if ready && capture.stage == (Stage::Rendering { until: None }) {
         capture.stage = Stage::Rendering {
-            until: capture.frames + capture.options.frames,
+            until: Some(capture.frames.saturating_add(capture.options.frames)),
         };
         for mut ao in &mut ours {
             if ao.temporal.enabled {
@@ -286,17 +295,19 @@ fn drive(
                 exit.write(AppExit::error());
             }
         }
-        Stage::Rendering { until } if capture.frames >= until => {
+        Stage::Rendering { until: Some(until) } if capture.frames >= until => {
             let Some(readback) = capture.readback.clone() else {
                 return;
             };
             commands
                 .spawn(Readback::texture(readback.visibility.clone()))
                 .observe(store_visibility);
-            capture.stage = Stage::Reading;
+            capture.stage = Stage::Reading {
+                since: capture.frames,
+            };
         }
         Stage::Rendering { .. } => {}
-        Stage::Reading => {
+        Stage::Reading { since } => {
             let out_color = capture.options.out_color.as_ref();
             let compared = match capture.compare.as_ref().map(|c| c.finish(out_color)) {
                 None => true,
@@ -314,7 +325,14 @@ fn drive(
                     || capture.color_done
                     || capture.compare.is_some())
                 && (capture.options.out_truth.is_none() || capture.truth_line.is_some());
-            if let (Some(visibility), true) = (capture.visibility.as_ref(), color_ready) {
+            // A short capture's spans are still on their way when its image is back.
+            let bevy_ssao = capture.options.technique == AoTechnique::BevySsao;
+            let timed = !capture.options.timings
+                || capture.frames >= since + TIMING_WAIT_FRAMES
+                || diagnostics.as_deref().is_none_or(|store| {
+                    timings::measured(store, bevy_ssao, capture.options.frames)
+                });
+            if let (Some(visibility), true) = (capture.visibility.as_ref(), color_ready && timed) {
                 let options = &capture.options;
                 if let Err(err) =
                     write_visibility_png(&options.out_ao, options.width, options.height, visibility)
@@ -338,7 +356,6 @@ fn drive(
                     println!("{line}");
                 }
                 if let (true, Some(store)) = (options.timings, diagnostics.as_deref()) {
-                    let bevy_ssao = options.technique == AoTechnique::BevySsao;
                     println!("{}", timings::summary(store, bevy_ssao));
                 }
                 exit.write(AppExit::Success);

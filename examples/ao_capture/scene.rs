@@ -170,7 +170,6 @@ fn scene_ready(
             });
         }
     }
-    let until = capture.frames + capture.options.frames;
-    capture.stage = Stage::Rendering { until };
+    capture.stage = Stage::Rendering { until: None };
     capture.stage_start = capture.frames;
 }

@@ -29,6 +29,18 @@ pub fn forget(store: &mut DiagnosticsStore) {
     }
 }
 
+/// Whether every AO span has come back for `frames` frames (or for as many as its history
+/// holds): timestamps come back a few frames after their frame, so a short capture waits for
+/// them before it prints. `false` while no AO span has come back at all.
+pub fn measured(store: &DiagnosticsStore, bevy_ssao: bool, frames: u32) -> bool {
+    let mut spans = store
+        .iter()
+        .filter(|d| gpu_span(d.path().as_str()).is_some_and(|name| is_ao_pass(name, bevy_ssao)))
+        .peekable();
+    spans.peek().is_some()
+        && spans.all(|d| d.history_len() >= (frames as usize).min(d.get_max_history_length()))
+}
+
 /// The one line `--timings` prints on stdout: `ao_gpu_ms`, the mean per frame of the AO passes
 /// summed; `frame_gpu_ms`, of every pass with a GPU time span; `frames`, how many frames the AO
 /// means are over (0, with `nan` times, where the adapter has no timestamp queries). Each pass's

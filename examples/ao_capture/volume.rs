@@ -87,8 +87,6 @@ pub fn place_volume(world: &mut World) {
     }
     let mut capture = world.resource_mut::<Capture>();
     capture.volume = volume;
-    // The frames to render start now that the volume exists.
-    capture.stage = Stage::Rendering {
-        until: capture.frames + capture.options.frames,
-    };
+    // The frames to render are counted once the volume exists (`drive`).
+    capture.stage = Stage::Rendering { until: None };
 }
