@@ -3,13 +3,42 @@
 //! (`cargo bench --bench gpu_passes` reads the spans by these labels).
 
 use bevy::color::LinearRgba;
+use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::{
     BindGroup, ComputePassDescriptor, ComputePipeline, LoadOp, Operations,
     RenderPassColorAttachment, RenderPassDescriptor, RenderPipeline, StoreOp, TextureView,
+    WgpuFeatures,
 };
-use bevy::render::renderer::RenderContext;
+use bevy::render::renderer::{RenderContext, RenderDevice};
+use wgpu::{QuerySet, QuerySetDescriptor, QueryType};
+
+/// A timestamp query the compute passes' time spans write right after their start, and nothing
+/// reads. lavapipe takes a timestamp's time when it next runs the draws it has queued (it bins the
+/// query with them), while it runs a compute dispatch at once: the start of a span whose passes
+/// read no freshly drawn texture was taken after their work, and the span read empty (the
+/// temporal pass's and the upsampling's, in most frames on models on a floor). Writing a
+/// timestamp makes lavapipe run what it has queued first, so the span's start is taken there. On
+/// other adapters the write costs next to nothing. `None` where the device cannot write
+/// timestamps between passes, and on macOS, where Bevy writes none there either.
+#[derive(Resource)]
+pub(crate) struct SpanStart(Option<QuerySet>);
+
+impl FromWorld for SpanStart {
+    fn from_world(world: &mut World) -> Self {
+        let device = world.resource::<RenderDevice>();
+        let needed = WgpuFeatures::TIMESTAMP_QUERY | WgpuFeatures::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let writable = !cfg!(target_os = "macos") && device.features().contains(needed);
+        Self(writable.then(|| {
+            device.wgpu_device().create_query_set(&QuerySetDescriptor {
+                label: Some("dynamic_ao_span_start"),
+                ty: QueryType::Timestamp,
+                count: 1,
+            })
+        }))
+    }
+}
 
 /// The shape of a compute shader's workgroup, which its WGSL's `@workgroup_size` states too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,6 +80,7 @@ pub(crate) struct ComputeStep<'a> {
 /// same name when `debug_group` is set.
 pub(crate) fn record_passes(
     ctx: &mut RenderContext,
+    span_start: &SpanStart,
     label: &'static str,
     debug_group: bool,
     steps: &[ComputeStep],
@@ -59,6 +89,9 @@ pub(crate) fn record_passes(
     let diagnostics = diagnostics.as_deref();
     let time_span = diagnostics.time_span(ctx.command_encoder(), label);
     let encoder = ctx.command_encoder();
+    if let (Some(_), Some(query)) = (diagnostics, span_start.0.as_ref()) {
+        encoder.write_timestamp(query, 0);
+    }
     if debug_group {
         encoder.push_debug_group(label);
     }

@@ -143,6 +143,7 @@ mod view;
 pub mod voxels;
 
 use bevy::app::{App, Plugin};
+use bevy::render::GpuResourceAppExt;
 use bevy::shader::load_shader_library;
 
 pub use memory::DynamicAoGpuMemory;
@@ -211,5 +212,8 @@ impl Plugin for DynamicAoPlugin {
     fn finish(&self, app: &mut App) {
         memory::insert(app);
         schedule::configure(app);
+        if let Some(render_app) = capabilities::render_app(app) {
+            render_app.init_gpu_resource::<dispatch::SpanStart>();
+        }
     }
 }

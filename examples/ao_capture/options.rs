@@ -102,9 +102,9 @@ pub struct Options {
     pub thickness: f32,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
-    /// Frames rendered after the scene is posed, before the capture (default: 4, or where the
-    /// occlusion is accumulated twice `DynamicAo::history_frames`, so the capture shows it
-    /// converged).
+    /// Frames rendered with a still camera before the capture, counted from the frame the scene
+    /// is ready (default: 4, or where the occlusion is accumulated twice
+    /// `DynamicAo::history_frames`, so the capture shows it converged).
     pub frames: u32,
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,

@@ -13,7 +13,7 @@ use bevy::render::{
 use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
-use crate::dispatch::{ComputeStep, Workgroup, record_passes};
+use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::view::{DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
 
 pub(crate) fn compose_pass(
@@ -28,6 +28,7 @@ pub(crate) fn compose_pass(
     )>,
     pipeline: Res<ComposePipeline>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (camera, ao_view, bind_group, settings_index, view_offset, ready, filter_wrote) =
@@ -52,7 +53,7 @@ pub(crate) fn compose_pass(
         texels: size,
         workgroup: Workgroup::Square,
     };
-    record_passes(&mut ctx, "dynamic_ao_compose", true, &[step]);
+    record_passes(&mut ctx, &span_start, "dynamic_ao_compose", true, &[step]);
 }
 
 pub(crate) fn debug_view_pass(

@@ -12,7 +12,7 @@ use bevy::render::{
 use super::bind_groups::{BlurBindGroups, UpsampleBindGroup, VisibilityBindGroup};
 use super::pipeline::BlurPipelines;
 use crate::compose::AoPassesReady;
-use crate::dispatch::{ComputeStep, Workgroup, record_passes};
+use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::view::DynamicAoUniform;
 
 /// The pipeline and bind group of a view's last filter pass: `own`, or once our passes write
@@ -43,6 +43,7 @@ pub(crate) fn blur_pass(
     )>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (camera, bind_groups, view_offset, settings_index, visibility, ready) = view.into_inner();
@@ -72,7 +73,7 @@ pub(crate) fn blur_pass(
         texels: size,
         workgroup: Workgroup::Square,
     });
-    record_passes(&mut ctx, "dynamic_ao_blur", true, &steps);
+    record_passes(&mut ctx, &span_start, "dynamic_ao_blur", true, &steps);
 }
 
 pub(crate) fn upsample_pass(
@@ -87,6 +88,7 @@ pub(crate) fn upsample_pass(
     )>,
     pipelines: Res<BlurPipelines>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (camera, upsample, view_offset, settings_index, blur, visibility, ready) =
@@ -122,5 +124,5 @@ pub(crate) fn upsample_pass(
         texels: (size + 1) / 2,
         workgroup: Workgroup::Row,
     };
-    record_passes(&mut ctx, "dynamic_ao_upsample", true, &[step]);
+    record_passes(&mut ctx, &span_start, "dynamic_ao_upsample", true, &[step]);
 }

@@ -9,7 +9,7 @@ use bevy::render::{
     view::ViewUniformOffset,
 };
 
-use crate::dispatch::{ComputeStep, Workgroup, record_passes};
+use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
@@ -25,6 +25,7 @@ pub(super) fn image_space_pass(
     )>,
     pipelines: Res<ImageSpacePipelines>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (camera, ao_view, bind_group, view_offset, settings_index) = view.into_inner();
@@ -56,5 +57,5 @@ pub(super) fn image_space_pass(
         texels,
         workgroup: Workgroup::Square,
     };
-    record_passes(&mut ctx, label, true, &[step]);
+    record_passes(&mut ctx, &span_start, label, true, &[step]);
 }

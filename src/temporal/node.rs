@@ -10,7 +10,7 @@ use bevy::render::{
 };
 
 use super::pipeline::{Channels, TemporalBindGroup, TemporalPipeline};
-use crate::dispatch::{ComputeStep, Workgroup, record_passes};
+use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
 
 pub(crate) fn temporal_pass(
@@ -22,6 +22,7 @@ pub(crate) fn temporal_pass(
     )>,
     pipeline: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (ao_view, textures, bind_group, view_offset) = view.into_inner();
@@ -40,7 +41,7 @@ pub(crate) fn temporal_pass(
         texels: UVec2::new(size.width, size.height),
         workgroup: Workgroup::Row,
     };
-    record_passes(&mut ctx, "dynamic_ao_temporal", true, &[step]);
+    record_passes(&mut ctx, &span_start, "dynamic_ao_temporal", true, &[step]);
 }
 
 /// The temporal pass counts until its pipeline has compiled.

@@ -13,7 +13,7 @@ use bevy::render::{
 
 use super::buffers::VoxelBuffers;
 use super::pipeline::{VoxelBindGroups, VoxelPipelines};
-use crate::dispatch::{ComputeStep, Workgroup, record_passes};
+use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::filter::BlurPipelines;
 use crate::temporal::{Channels, TemporalPipeline};
 use crate::view::{DynamicAoUniform, DynamicAoView, FarTerm, PendingPasses};
@@ -33,6 +33,7 @@ pub(crate) fn voxel_pass(
     blur: Res<BlurPipelines>,
     temporal: Res<TemporalPipeline>,
     pipeline_cache: Res<PipelineCache>,
+    span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
     let (camera, bind_groups, view_offset, settings_index) = view.into_inner();
@@ -99,7 +100,13 @@ pub(crate) fn voxel_pass(
         texels: (size + 1) / 2,
         workgroup: Workgroup::Square,
     };
-    record_passes(&mut ctx, "dynamic_ao_voxel_ao", false, &[sample_step]);
+    record_passes(
+        &mut ctx,
+        &span_start,
+        "dynamic_ao_voxel_ao",
+        false,
+        &[sample_step],
+    );
 
     if let (Some(bind_group), Some(accumulate)) = (
         &bind_groups.temporal,
@@ -113,7 +120,13 @@ pub(crate) fn voxel_pass(
             texels: (size + 1) / 2,
             workgroup: Workgroup::Row,
         };
-        record_passes(&mut ctx, "dynamic_ao_voxel_temporal", false, &[step]);
+        record_passes(
+            &mut ctx,
+            &span_start,
+            "dynamic_ao_voxel_temporal",
+            false,
+            &[step],
+        );
     }
 
     // The upsampling runs one invocation per 2 × 2 pixels (`filter/upsample.wgsl`).
@@ -153,7 +166,13 @@ pub(crate) fn voxel_pass(
             },
         )
         .collect();
-    record_passes(&mut ctx, "dynamic_ao_voxel_filter", false, &steps);
+    record_passes(
+        &mut ctx,
+        &span_start,
+        "dynamic_ao_voxel_filter",
+        false,
+        &steps,
+    );
 }
 
 /// A view with voxel volumes counts their passes until they have compiled.
