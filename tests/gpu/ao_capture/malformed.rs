@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use bevy::prelude::*;
 use bevy_dynamic_ao::reference::{metrics::rmse, png16::read_visibility_png};
 
-use super::{run, scene_path, temp_dir};
+use super::{capture_args, run, scene_path, temp_dir};
 use crate::gltf_scene::{self, NodeKind};
 
 #[test]
@@ -222,20 +222,8 @@ fn capture_near_field(scene: &Path, out_ao: &Path) -> String {
 
 /// A 64 × 48 capture of `scene` with `technique` into `out_ao`, which must succeed; its stderr.
 fn capture_small(scene: &Path, out_ao: &Path, technique: &str) -> String {
-    let out = run(&[
-        "--scene",
-        scene.to_str().unwrap(),
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "--radius",
-        "0.75",
-        "--technique",
-        technique,
-        "--out-ao",
-        out_ao.to_str().unwrap(),
-    ]);
+    let args = capture_args(scene, (64, 48), technique, out_ao);
+    let out = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(
         out.status.success(),

@@ -39,6 +39,33 @@ fn run_ok(args: &[&str]) -> Output {
     out
 }
 
+/// The arguments of a capture of `scene` at `width` × `height` pixels, R = 0.75 m, with
+/// `technique`, into `out_ao`.
+fn capture_args(
+    scene: &Path,
+    (width, height): (u32, u32),
+    technique: &str,
+    out_ao: &Path,
+) -> Vec<String> {
+    let (width, height) = (width.to_string(), height.to_string());
+    [
+        "--scene",
+        scene.to_str().unwrap(),
+        "--width",
+        &width,
+        "--height",
+        &height,
+        "--radius",
+        "0.75",
+        "--technique",
+        technique,
+        "--out-ao",
+        out_ao.to_str().unwrap(),
+    ]
+    .map(str::to_string)
+    .to_vec()
+}
+
 fn scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cube_on_plane.glb")
 }

@@ -5,29 +5,13 @@ use std::path::Path;
 use bevy::prelude::*;
 use bevy_dynamic_ao::reference::png16::read_visibility_png;
 
-use super::{run, run_ok, scene_path, temp_dir};
+use super::{capture_args, run, run_ok, scene_path, temp_dir};
 
 /// Captures cube on plane at 96 × 72 with `technique` and `extra` options into `dir`: the AO
 /// image, and stdout and stderr together, as a script that merges them reads them.
 fn capture(dir: &Path, technique: &str, extra: &[&str]) -> (Vec<f32>, String) {
     let out_ao = dir.join(format!("{technique}.png"));
-    let mut args = vec![
-        "--scene",
-        scene_path().to_str().unwrap(),
-        "--width",
-        "96",
-        "--height",
-        "72",
-        "--radius",
-        "0.75",
-        "--technique",
-        technique,
-        "--out-ao",
-        out_ao.to_str().unwrap(),
-    ]
-    .into_iter()
-    .map(str::to_string)
-    .collect::<Vec<_>>();
+    let mut args = capture_args(&scene_path(), (96, 72), technique, &out_ao);
     args.extend(extra.iter().map(|a| a.to_string()));
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = run_ok(&args);
