@@ -74,8 +74,9 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
     }
 }
 
-/// A span under this many milliseconds bracketed none of its pass's work: lavapipe writes some
-/// compute passes' two timestamps with the work outside them (BENCHMARKS.md, "Per-frame spans").
+/// A span under this many milliseconds bracketed none of its pass's work: an adapter may take a
+/// span's timestamps with the work outside them (lavapipe did so for our compute passes until
+/// each span's start made it run its queue first: BENCHMARKS.md, "Spans that hold their work").
 const EMPTY_SPAN_MS: f64 = 0.2;
 
 /// A warning for stderr where the span `name` read under [`EMPTY_SPAN_MS`] in a quarter or more
