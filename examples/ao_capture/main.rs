@@ -24,9 +24,11 @@
 //! `--frames N` renders N frames with a still camera before the capture, counted from the frame
 //! the scene is ready, where an accumulated history starts over, so that captures are
 //! reproducible (default: 4, or where the occlusion is accumulated twice the frames its history
-//! spans, so the capture shows it converged: 64 for the ray march, 32 for the others). `--timings` then prints one line,
+//! spans, so the capture shows it converged: 64 for the ray march, 32 for the others).
+//! `--timings` then prints one line,
 //! `timings: ao_gpu_ms=<mean GPU ms of the AO passes> frame_gpu_ms=<all passes> frames=<n>`, over
-//! the frames rendered once the scene was ready (for `bevy-ssao` the AO pass is Bevy's own).
+//! the frames rendered once the scene was ready, waiting for the last ones' spans (for
+//! `bevy-ssao` the AO pass is Bevy's own).
 //! `--msaa 4` renders with 4 samples per pixel (default 1, off; the AO passes read a
 //! single-sampled front layer that holds what a prepass without MSAA would).
 //!
