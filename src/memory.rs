@@ -12,8 +12,9 @@ use bevy::render::RenderApp;
 
 /// GPU memory the plugin's own buffers and history textures hold, bytes, as the render world
 /// left them after its latest frame, by owner: `"spheres"` (proxy buffer), `"fields"` (field
-/// cells and occluders), `"voxels"` (grids, triangles, volumes) and `"temporal"` (every view's
-/// two history textures). What Bevy's texture cache lends the passes (ND-buffer layers,
+/// cells and occluders), `"voxels"` (grids, triangles, volumes), `"temporal"` (every view's
+/// two history textures) and `"back faces"` (the coarse copies of meshes of many triangles and
+/// their instances). What Bevy's texture cache lends the passes (ND-buffer layers,
 /// occlusion buffers) is Bevy's and not counted.
 ///
 /// A main-world resource [`DynamicAoPlugin`](crate::DynamicAoPlugin) inserts. Watch it in a

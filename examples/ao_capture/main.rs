@@ -6,7 +6,7 @@
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
 //!     [--accumulated-blur PIXELS] \
 //!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] \
-//!     [--thickness F] [--half-res] \
+//!     [--thickness F] [--full-back-faces] [--half-res] \
 //!     [--far-blend count-once|add|max] \
 //!     [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
@@ -31,6 +31,9 @@
 //! `bevy-ssao` the AO pass is Bevy's own).
 //! `--msaa 4` renders with 4 samples per pixel (default 1, off; the AO passes read a
 //! single-sampled front layer that holds what a prepass without MSAA would).
+//! `--full-back-faces` draws the back-face layer from every mesh as it is, without the coarse
+//! copies of meshes of many triangles (`DynamicAo::coarse_back_faces` off), to measure what
+//! they change.
 //!
 //! `--technique list` prints the technique names: the image-space ones, the far-field terms alone
 //! (`spheres`: a `SphereOccluder` on the scene root so every mesh casts it; `fields`: an AO field

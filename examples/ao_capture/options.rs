@@ -11,7 +11,7 @@ use crate::common::{parse_between, parse_number};
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -100,6 +100,9 @@ pub struct Options {
     /// How far behind the back-face layer the ray march's steps count as blocked, a fraction of
     /// R (`RayMarchParams::thickness`).
     pub thickness: f32,
+    /// Draw the back-face layer from every mesh as it is, without coarse copies
+    /// (`DynamicAo::coarse_back_faces` off).
+    pub full_back_faces: bool,
     /// Compute the occlusion at half resolution and upsample it.
     pub half_resolution: bool,
     /// Frames rendered with a still camera before the capture, counted from the frame the scene
@@ -150,6 +153,7 @@ impl Options {
         let mut blur_detail = AoBlur::default().detail_reach;
         let mut thickness = RayMarchParams::default().thickness;
         let mut half_resolution = false;
+        let mut full_back_faces = false;
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
         let mut voxel_falloff = VoxelFalloff::default();
@@ -241,6 +245,7 @@ impl Options {
                 }
                 // A fraction of R.
                 "--thickness" => thickness = parse_between(&flag, &value()?, 0.0, 1.0)?,
+                "--full-back-faces" => full_back_faces = true,
                 "--time" => {
                     let text = value()?;
                     time = text
@@ -322,6 +327,7 @@ impl Options {
             blur_normal_sharpness,
             blur_detail,
             thickness,
+            full_back_faces,
             half_resolution,
             frames: frames.unwrap_or_else(|| {
                 let ao = DynamicAo {

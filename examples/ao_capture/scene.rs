@@ -130,6 +130,7 @@ fn scene_ready(
             voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
             temporal: options.temporal,
+            coarse_back_faces: !options.full_back_faces,
             // Every technique's budget at the chosen level.
             ..DynamicAo::from_preset(options.preset)
         },

@@ -11,6 +11,7 @@
 //! - [`closed`]: whether a triangle soup encloses a volume (within a rounding, or exactly).
 //! - [`cap`]: the share of ambient light a cone of directions blocks (T_clip, sphere caps), as
 //!   `shaders/cap_occlusion.wgsl` evaluates it.
+//! - [`simplify`]: fewer triangles for the same surface, by vertex clustering.
 //! - [`hash`]: the PCG hash, bit-identical on the CPU and in WGSL.
 
 pub mod bvh;
@@ -19,4 +20,5 @@ pub mod closed;
 pub mod deform;
 pub mod hash;
 pub mod rest_mesh;
+pub mod simplify;
 pub mod triangles;

@@ -456,5 +456,6 @@ fn draw_centre_sample(
             depth: &target.depth.default_view,
         },
         phase,
+        |_| {},
     );
 }

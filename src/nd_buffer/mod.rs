@@ -12,8 +12,10 @@
 //! normals are drawn only where the near field reads them; for every other technique the layer
 //! is depth only, drawn without a fragment stage and with a vertex stage of its own
 //! (`back_depth.wgsl`) that computes the clip position alone, through the same morph, skin and
-//! transform functions as Bevy's.
+//! transform functions as Bevy's; rigid meshes of many triangles are drawn into that layer from
+//! coarse copies (`coarse`).
 
+mod coarse;
 mod front_layer;
 mod node;
 mod phase;
@@ -25,13 +27,14 @@ use bevy::core_pipeline::schedule::Core3d;
 use bevy::ecs::schedule::IntoScheduleConfigs;
 use bevy::pbr::MeshPipeline;
 use bevy::render::{
-    ExtractSchedule, Render, RenderDebugFlags, RenderStartup, RenderSystems,
+    ExtractSchedule, GpuResourceAppExt, Render, RenderDebugFlags, RenderStartup, RenderSystems,
     render_phase::{AddRenderCommand, DrawFunctions, SortedRenderPhasePlugin, sort_phase_system},
     render_resource::{SpecializedMeshPipelines, SpecializedRenderPipelines},
 };
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoStartup, DynamicAoSystems};
+pub use coarse::COARSE_BACK_FACES_ABOVE;
 pub(crate) use front_layer::{FrontLayer, FrontLayerViews};
 pub use phase::{BackFace3d, CentreSample3d, NdLayer3d};
 
@@ -43,6 +46,7 @@ impl Plugin for NdBufferPlugin {
         embedded_asset!(app, "layer_normals.wgsl");
         embedded_asset!(app, "back_depth.wgsl");
         embedded_asset!(app, "front_layer.wgsl");
+        embedded_asset!(app, "coarse/coarse_back_depth.wgsl");
         app.add_plugins((
             SortedRenderPhasePlugin::<BackFace3d, MeshPipeline>::new(RenderDebugFlags::default()),
             SortedRenderPhasePlugin::<CentreSample3d, MeshPipeline>::new(
@@ -60,6 +64,9 @@ impl Plugin for NdBufferPlugin {
             .init_resource::<DrawFunctions<BackFace3d>>()
             .init_resource::<DrawFunctions<CentreSample3d>>()
             .init_resource::<SpecializedRenderPipelines<front_layer::FrontLayerCopyPipeline>>()
+            .init_resource::<coarse::CoarseMeshes>()
+            .init_resource::<coarse::CoarseInstances>()
+            .init_resource::<coarse::CoarseDraws>()
             .add_render_command::<BackFace3d, phase::DrawLayerMeshes>()
             .add_render_command::<CentreSample3d, phase::DrawLayerMeshes>()
             .add_systems(
@@ -74,6 +81,7 @@ impl Plugin for NdBufferPlugin {
                 (
                     phase::extract_layer_phases::<true>,
                     phase::extract_layer_phases::<false>,
+                    coarse::extract_coarse_back_faces,
                 ),
             )
             .add_systems(
@@ -83,6 +91,7 @@ impl Plugin for NdBufferPlugin {
                     sort_phase_system::<BackFace3d>.in_set(RenderSystems::PhaseSort),
                     sort_phase_system::<CentreSample3d>.in_set(RenderSystems::PhaseSort),
                     front_layer::prepare_front_layer_copies.in_set(RenderSystems::PrepareResources),
+                    coarse::prepare_coarse_back_faces.in_set(RenderSystems::PrepareBindGroups),
                     front_layer::wait_for_front_layer_copy.in_set(DynamicAoPrepare::Readiness),
                     front_layer::prepare_front_layer_copy_bind_groups
                         .in_set(DynamicAoPrepare::BindGroups),
@@ -95,5 +104,6 @@ impl Plugin for NdBufferPlugin {
                     node::back_face_pass.in_set(DynamicAoSystems::BackFaces),
                 ),
             );
+        render_app.init_gpu_resource::<coarse::CoarseBackPipeline>();
     }
 }

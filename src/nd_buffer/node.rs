@@ -3,19 +3,21 @@
 
 use bevy::camera::Viewport;
 use bevy::ecs::prelude::*;
+use bevy::ecs::system::SystemParam;
 use bevy::log::error;
 use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
-    render_phase::{SortedRenderPhase, ViewSortedRenderPhases},
+    render_phase::{SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases},
     render_resource::{
-        LoadOp, Operations, RenderPassColorAttachment, RenderPassDepthStencilAttachment,
-        RenderPassDescriptor, StoreOp, TextureView,
+        LoadOp, Operations, PipelineCache, RenderPassColorAttachment,
+        RenderPassDepthStencilAttachment, RenderPassDescriptor, StoreOp, TextureView,
     },
     renderer::{RenderContext, ViewQuery},
-    view::ExtractedView,
+    view::{ExtractedView, ViewUniformOffset},
 };
 
+use super::coarse::{CoarseBackPipeline, CoarseDraws, CoarseMeshes, draw_coarse_back_faces};
 use super::phase::{BackFace3d, NdLayer3d};
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoTextures, DynamicAoView};
@@ -27,12 +29,14 @@ pub(crate) fn back_face_pass(
         &ExtractedView,
         &DynamicAoTextures,
         &DynamicAoView,
+        &ViewUniformOffset,
     )>,
     phases: Res<ViewSortedRenderPhases<BackFace3d>>,
+    coarse: CoarseBackFaces,
     mut ctx: RenderContext,
 ) {
     let view_entity = view.entity();
-    let (camera, extracted_view, textures, ao_view) = view.into_inner();
+    let (camera, extracted_view, textures, ao_view, view_offset) = view.into_inner();
     // Under Bevy's own SSAO none of our passes reads the layer.
     if ao_view.technique() == AoTechnique::BevySsao {
         return;
@@ -52,7 +56,27 @@ pub(crate) fn back_face_pass(
             depth: &textures.back_depth.default_view,
         },
         phases.get(&extracted_view.retained_view_entity),
+        |pass| {
+            draw_coarse_back_faces(
+                pass,
+                extracted_view.retained_view_entity,
+                view_offset,
+                &coarse.draws,
+                &coarse.meshes,
+                &coarse.pipeline,
+                &coarse.cache,
+            );
+        },
     );
+}
+
+/// What the back-face pass draws the coarse copies with.
+#[derive(SystemParam)]
+pub(crate) struct CoarseBackFaces<'w> {
+    draws: Res<'w, CoarseDraws>,
+    meshes: Res<'w, CoarseMeshes>,
+    pipeline: Res<'w, CoarseBackPipeline>,
+    cache: Res<'w, PipelineCache>,
 }
 
 /// A colour attachment cleared to zero.
@@ -75,15 +99,17 @@ pub(super) struct LayerTargets<'a> {
     pub depth: &'a TextureView,
 }
 
-/// Draws `phase` into `targets`, the size of the camera's viewport. The targets are cleared even
-/// when nothing is drawn: an empty texel reads as "no surface".
-pub(super) fn draw_layer<const BACK: bool>(
-    ctx: &mut RenderContext,
-    world: &World,
+/// Draws `phase` into `targets`, the size of the camera's viewport, then whatever `more` draws in
+/// the same pass. The targets are cleared even when nothing is drawn: an empty texel reads as
+/// "no surface".
+pub(super) fn draw_layer<'a, const BACK: bool>(
+    ctx: &'a mut RenderContext,
+    world: &'a World,
     view_entity: Entity,
     camera: &ExtractedCamera,
     targets: LayerTargets,
     phase: Option<&SortedRenderPhase<NdLayer3d<BACK>>>,
+    more: impl FnOnce(&mut TrackedRenderPass<'a>),
 ) {
     let diagnostics = ctx.diagnostic_recorder();
     let diagnostics = diagnostics.as_deref();
@@ -115,5 +141,6 @@ pub(super) fn draw_layer<const BACK: bool>(
     {
         error!("dynamic AO: error while drawing {}: {err:?}", targets.label);
     }
+    more(&mut pass);
     pass_span.end(&mut pass);
 }

@@ -29,6 +29,7 @@ use bevy::render::{
 };
 use bevy::shader::Shader;
 
+use super::coarse::CoarseQueue;
 use super::front_layer::DEPTH_GRADIENT_FORMAT;
 use super::phase::{BackFace3d, CentreSample3d, DrawLayerMeshes, NdLayer3d};
 use crate::settings::AoTechnique;
@@ -191,7 +192,8 @@ impl SpecializedMeshPipeline for BackFacePipeline {
 }
 
 /// Queues every visible mesh with a material into the back-face phase of each view that reads
-/// the back layer, and into the centre-depth phase of each MSAA view.
+/// the back layer (or, where it has a coarse copy, into the coarse draw: `coarse`), and into the
+/// centre-depth phase of each MSAA view.
 pub(crate) fn queue_layers(
     draw_functions: Res<DrawFunctions<BackFace3d>>,
     centre_draw_functions: Res<DrawFunctions<CentreSample3d>>,
@@ -212,10 +214,13 @@ pub(crate) fn queue_layers(
     materials: Res<RenderMaterialInstances>,
     prepared_materials: Res<ErasedRenderAssets<PreparedMaterial>>,
     mut warned: Local<HashSet<AssetId<Mesh>>>,
+    mut coarse: CoarseQueue,
 ) {
     let draw_function = draw_functions.read().id::<DrawLayerMeshes>();
     let centre_draw_function = centre_draw_functions.read().id::<DrawLayerMeshes>();
+    coarse.retain(|view| phases.contains_key(view));
     for (view, visible_entities, ao_view, msaa) in &views {
+        coarse.begin(view.retained_view_entity);
         let (Some(phase), Some(centre_phase)) = (
             phases.get_mut(&view.retained_view_entity),
             centre_phases.get_mut(&view.retained_view_entity),
@@ -320,7 +325,10 @@ pub(crate) fn queue_layers(
                         masked,
                     })
             };
-            if let Some(pipeline) = back.and_then(&mut specialize) {
+            let coarse_drawn = back == Some(LayerDraw::BackDepth)
+                && ao_view.coarse_back_faces
+                && coarse.take(view.retained_view_entity, *main_entity, &pipeline_cache);
+            if !coarse_drawn && let Some(pipeline) = back.and_then(&mut specialize) {
                 phase.add_retained(NdLayer3d::new(
                     entity,
                     pipeline,

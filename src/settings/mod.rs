@@ -112,6 +112,14 @@ pub struct DynamicAo {
     /// Replace the lit image with the AO buffer (visibility, white = open), full screen.
     /// Default: `false`.
     pub debug_view: bool,
+    /// Draw the back-face layer of rigid meshes of more than
+    /// [`COARSE_BACK_FACES_ABOVE`](crate::nd_buffer::COARSE_BACK_FACES_ABOVE) triangles from a copy of a
+    /// quarter of their triangles or fewer, clustered on a grid of about twice their mean edge.
+    /// The layer bounds the solid behind the visible surface; a copy that strays by a cell moves
+    /// it by less than the margin its readers already allow
+    /// ([`RayMarchParams::thickness`] × R). Where the layer carries normals (the near field) and
+    /// for skinned or morph-target meshes, the full mesh is drawn. Default: `true`.
+    pub coarse_back_faces: bool,
 }
 
 impl Default for DynamicAo {
@@ -133,6 +141,7 @@ impl Default for DynamicAo {
             field_shading: FieldShading::Cone,
             voxels: true,
             debug_view: false,
+            coarse_back_faces: true,
         }
     }
 }

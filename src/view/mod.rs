@@ -119,6 +119,9 @@ pub(crate) struct DynamicAoView {
     /// The back-face layer's normals are drawn too: only the near field reads them. Without,
     /// the layer is depth only, which rasterizes without a fragment shader.
     pub back_normals: bool,
+    /// Rigid meshes of many triangles draw the depth-only back-face layer from their coarse
+    /// copies ([`crate::DynamicAo::coarse_back_faces`]).
+    pub coarse_back_faces: bool,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
     /// Occlusion computed at half resolution and upsampled.

@@ -190,6 +190,7 @@ pub(super) fn extract_views(
                 settings: ao.clone(),
                 back_layer,
                 back_normals,
+                coarse_back_faces: back_layer && !back_normals && ao.coarse_back_faces,
                 blur_radius: if image_space { blur.radius } else { 0 },
                 half_resolution: image_space && ao.half_resolution,
                 far_half_resolution: ao.half_resolution,

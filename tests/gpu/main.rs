@@ -18,6 +18,7 @@ mod back_layer;
 mod bad_input;
 mod camera_setups;
 mod cameras;
+mod coarse_back_faces;
 mod device_limits;
 mod examples;
 mod far_field;
