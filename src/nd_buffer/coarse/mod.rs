@@ -40,7 +40,7 @@ use crate::settings::DynamicAo;
 
 /// Meshes of more triangles than this draw the back-face layer from a coarse copy where
 /// [`DynamicAo::coarse_back_faces`] is on. Below it the layer costs little on any rasterizer.
-pub const COARSE_BACK_FACES_ABOVE: usize = 16_384;
+pub const COARSE_BACK_FACES_ABOVE: usize = 8_192;
 
 /// A mesh's coarse copy on the GPU: positions (mesh space, `Float32x3`) and `u32` indices.
 pub(crate) struct CoarseMesh {
