@@ -3,21 +3,20 @@
 
 use bevy::camera::Viewport;
 use bevy::ecs::prelude::*;
-use bevy::ecs::system::SystemParam;
 use bevy::log::error;
 use bevy::render::{
     camera::ExtractedCamera,
     diagnostic::RecordDiagnostics,
     render_phase::{SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases},
     render_resource::{
-        LoadOp, Operations, PipelineCache, RenderPassColorAttachment,
+        LoadOp, Operations, RenderPassColorAttachment,
         RenderPassDepthStencilAttachment, RenderPassDescriptor, StoreOp, TextureView,
     },
     renderer::{RenderContext, ViewQuery},
     view::{ExtractedView, ViewUniformOffset},
 };
 
-use super::coarse::{CoarseBackPipeline, CoarseDraws, CoarseMeshes, draw_coarse_back_faces};
+use super::coarse::CoarseBackFaces;
 use super::phase::{BackFace3d, NdLayer3d};
 use crate::settings::AoTechnique;
 use crate::view::{DynamicAoTextures, DynamicAoView};
@@ -56,28 +55,10 @@ pub(crate) fn back_face_pass(
             depth: &textures.back_depth.default_view,
         },
         phases.get(&extracted_view.retained_view_entity),
-        |pass| {
-            draw_coarse_back_faces(
-                pass,
-                extracted_view.retained_view_entity,
-                view_offset,
-                &coarse.draws,
-                &coarse.meshes,
-                &coarse.pipeline,
-                &coarse.cache,
-            );
-        },
+        |pass| coarse.draw(pass, extracted_view.retained_view_entity, view_offset),
     );
 }
 
-/// What the back-face pass draws the coarse copies with.
-#[derive(SystemParam)]
-pub(crate) struct CoarseBackFaces<'w> {
-    draws: Res<'w, CoarseDraws>,
-    meshes: Res<'w, CoarseMeshes>,
-    pipeline: Res<'w, CoarseBackPipeline>,
-    cache: Res<'w, PipelineCache>,
-}
 
 /// A colour attachment cleared to zero.
 pub(super) fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {

@@ -93,7 +93,7 @@ struct CoarseDraw {
 }
 
 /// This frame's coarse back faces: the instances each view queued, then packed into one buffer
-/// with each view's draws, and the pipelines and view bind group they are drawn with.
+/// with each view's draws, and the view bind group they are drawn with.
 #[derive(Resource)]
 pub(crate) struct CoarseDraws {
     queued: HashMap<RetainedViewEntity, Vec<CoarseInstance>>,
@@ -206,33 +206,41 @@ pub(crate) fn prepare_coarse_back_faces(
     }
 }
 
-/// Draws `view`'s coarse back faces into the back-face layer's open `pass`.
-pub(crate) fn draw_coarse_back_faces<'w>(
-    pass: &mut TrackedRenderPass<'w>,
-    view: RetainedViewEntity,
-    view_offset: &ViewUniformOffset,
-    draws: &'w CoarseDraws,
-    meshes: &'w CoarseMeshes,
-    pipeline: &CoarseBackPipeline,
-    cache: &'w PipelineCache,
-) {
-    let (Some(list), Some(bind_group), Some(instances), Some(pipeline)) = (
-        draws.draws.get(&view),
-        draws.bind_group.as_ref(),
-        draws.instances.buffer(),
-        cache.get_render_pipeline(pipeline.id),
-    ) else {
-        return;
-    };
-    pass.set_render_pipeline(pipeline);
-    pass.set_bind_group(0, bind_group, &[view_offset.offset]);
-    pass.set_vertex_buffer(1, instances.slice(..));
-    for draw in list {
-        let Some(mesh) = meshes.get(draw.mesh) else {
-            continue;
+/// What the back-face pass draws the coarse copies with.
+#[derive(SystemParam)]
+pub(crate) struct CoarseBackFaces<'w> {
+    draws: Res<'w, CoarseDraws>,
+    meshes: Res<'w, CoarseMeshes>,
+    pipeline: Res<'w, CoarseBackPipeline>,
+    cache: Res<'w, PipelineCache>,
+}
+
+impl CoarseBackFaces<'_> {
+    /// Draws `view`'s coarse back faces into the back-face layer's open `pass`.
+    pub fn draw<'a>(
+        &'a self,
+        pass: &mut TrackedRenderPass<'a>,
+        view: RetainedViewEntity,
+        view_offset: &ViewUniformOffset,
+    ) {
+        let (Some(list), Some(bind_group), Some(instances), Some(pipeline)) = (
+            self.draws.draws.get(&view),
+            self.draws.bind_group.as_ref(),
+            self.draws.instances.buffer(),
+            self.cache.get_render_pipeline(self.pipeline.id),
+        ) else {
+            return;
         };
-        pass.set_vertex_buffer(0, mesh.positions.slice(..));
-        pass.set_index_buffer(mesh.indices.slice(..), IndexFormat::Uint32);
-        pass.draw_indexed(0..mesh.index_count, 0, draw.instances.clone());
+        pass.set_render_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[view_offset.offset]);
+        pass.set_vertex_buffer(1, instances.slice(..));
+        for draw in list {
+            let Some(mesh) = self.meshes.get(draw.mesh) else {
+                continue;
+            };
+            pass.set_vertex_buffer(0, mesh.positions.slice(..));
+            pass.set_index_buffer(mesh.indices.slice(..), IndexFormat::Uint32);
+            pass.draw_indexed(0..mesh.index_count, 0, draw.instances.clone());
+        }
     }
 }

@@ -31,7 +31,7 @@ use bevy::render::{
 use bevy::transform::components::GlobalTransform;
 
 pub(crate) use draw::{
-    CoarseBackPipeline, CoarseDraws, CoarseQueue, draw_coarse_back_faces, prepare_coarse_back_faces,
+    CoarseBackFaces, CoarseBackPipeline, CoarseDraws, CoarseQueue, prepare_coarse_back_faces,
 };
 
 use crate::geometry::rest_mesh::RestMesh;
