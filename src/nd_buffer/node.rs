@@ -9,8 +9,8 @@ use bevy::render::{
     diagnostic::RecordDiagnostics,
     render_phase::{SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases},
     render_resource::{
-        LoadOp, Operations, RenderPassColorAttachment,
-        RenderPassDepthStencilAttachment, RenderPassDescriptor, StoreOp, TextureView,
+        LoadOp, Operations, RenderPassColorAttachment, RenderPassDepthStencilAttachment,
+        RenderPassDescriptor, StoreOp, TextureView,
     },
     renderer::{RenderContext, ViewQuery},
     view::{ExtractedView, ViewUniformOffset},
@@ -58,7 +58,6 @@ pub(crate) fn back_face_pass(
         |pass| coarse.draw(pass, extracted_view.retained_view_entity, view_offset),
     );
 }
-
 
 /// A colour attachment cleared to zero.
 pub(super) fn cleared(view: &TextureView) -> Option<RenderPassColorAttachment<'_>> {

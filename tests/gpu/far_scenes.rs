@@ -314,6 +314,7 @@ impl FarRun {
             ao.half_resolution = image_space.half_resolution;
             ao.blur = image_space.blur;
             ao.temporal = image_space.temporal;
+            ao.coarse_back_faces = image_space.coarse_back_faces;
             ao.radius = radius;
             ao.far_field_blend = blend;
             FarTerm::select(far, ao);
