@@ -23,8 +23,9 @@
 //!   trail; a history the clamp moved by more than 0.03 counts as at most four frames, so the
 //!   change settles quickly. The image-space clamp runs on every other frame: it is there for
 //!   changes the motion vectors miss, which it catches a frame later, not for noise, which the
-//!   average removes; the frames between skip its workgroup tile and window (BENCHMARKS.md, "The
-//!   clamp every other frame"). The voxel term keeps the range of its 3 × 3 neighbours widened by
+//!   average removes; the frames between run a pipeline compiled without its workgroup tile and
+//!   window (BENCHMARKS.md, "The clamp every other frame" and "A temporal pipeline without the
+//!   clamp"). The voxel term keeps the range of its 3 × 3 neighbours widened by
 //!   0.05 (the mean biased it at the voxel grid's steps), every frame.
 //! - **Average.** Running mean over at most [`AoTemporal::max_frames`] frames: the history keeps
 //!   its frame count, and each frame weighs 1 / count.
@@ -33,7 +34,8 @@
 //!   skipped keeps its reprojected (and, on clamp frames, clamped) history with its count
 //!   unchanged: the count is of samples, so a history of `max_frames` samples spans twice as many
 //!   frames. Where a skipped texel has no history (a disocclusion), it takes the mean of its
-//!   four neighbours on its surface, all marched this frame, counted as half a sample. The
+//!   four neighbours on its surface, all marched this frame, counted as half a sample (read from
+//!   the clamp's tile on the frames that fill one). The
 //!   clamp's window reads the skipped texels' values of last frame, which the march left in
 //!   place: at the default budget this kept the converged error of marching every texel, where
 //!   a window of the marched texels alone raised it by 2–16% (BENCHMARKS.md, "Half the texels

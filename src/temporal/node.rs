@@ -10,6 +10,7 @@ use bevy::render::{
 };
 
 use super::pipeline::{Channels, TemporalBindGroup, TemporalPipeline};
+use super::view::TemporalHistory;
 use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
 use crate::view::{DynamicAoTextures, DynamicAoView, PendingPasses};
 
@@ -18,6 +19,7 @@ pub(crate) fn temporal_pass(
         &DynamicAoView,
         &DynamicAoTextures,
         &TemporalBindGroup,
+        &TemporalHistory,
         &ViewUniformOffset,
     )>,
     pipeline: Res<TemporalPipeline>,
@@ -25,10 +27,10 @@ pub(crate) fn temporal_pass(
     span_start: Res<SpanStart>,
     mut ctx: RenderContext,
 ) {
-    let (ao_view, textures, bind_group, view_offset) = view.into_inner();
+    let (ao_view, textures, bind_group, history, view_offset) = view.into_inner();
     let (true, Some(compute_pipeline)) = (
         ao_view.temporal,
-        pipeline_cache.get_compute_pipeline(pipeline.one.pipeline),
+        pipeline_cache.get_compute_pipeline(pipeline.one.pipeline(history.clamps())),
     ) else {
         return;
     };

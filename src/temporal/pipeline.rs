@@ -11,16 +11,33 @@ use bevy::render::{
     renderer::RenderDevice,
     view::{ViewUniform, ViewUniforms},
 };
+use bevy::shader::ShaderDefVal;
 use bevy::utils::default;
 
 use super::view::{TemporalHistory, TemporalUniform};
 use crate::nd_buffer::{FrontLayer, FrontLayerViews};
 use crate::view::{DynamicAoTextures, OCCLUSION_FORMAT, OCCLUSION_PAIR_FORMAT};
 
-/// One accumulation pipeline and its layout.
+/// One accumulation's pipelines and their layout.
 pub(crate) struct TemporalVariant {
     layout: BindGroupLayoutDescriptor,
-    pub pipeline: CachedComputePipelineId,
+    /// The pipeline that clamps the history (`CLAMP` in `temporal.wgsl`).
+    pub clamped: CachedComputePipelineId,
+    /// The image-space occlusion's pipeline for the frames without the clamp (every other one),
+    /// compiled without its tile and window: a flag in the uniform spared only part of their work
+    /// on lavapipe, which runs an `if`'s body under a mask (the pass about a quarter shorter this
+    /// way; BENCHMARKS.md, "A temporal pipeline without the clamp").
+    pub unclamped: Option<CachedComputePipelineId>,
+}
+
+impl TemporalVariant {
+    /// The pipeline of a frame that clamps the history, or of one that does not.
+    pub fn pipeline(&self, clamp: bool) -> CachedComputePipelineId {
+        match (clamp, self.unclamped) {
+            (false, Some(unclamped)) => unclamped,
+            _ => self.clamped,
+        }
+    }
 }
 
 /// What a history accumulates: one channel or a pair.
@@ -47,17 +64,19 @@ impl TemporalPipeline {
         }
     }
 
-    /// Whether the pipeline for `channels` has compiled.
+    /// Whether the pipelines for `channels` have compiled.
     pub fn ready(&self, cache: &PipelineCache, channels: Channels) -> bool {
-        cache
-            .get_compute_pipeline(self.variant(channels).pipeline)
-            .is_some()
+        let variant = self.variant(channels);
+        [Some(variant.clamped), variant.unclamped]
+            .into_iter()
+            .flatten()
+            .all(|id| cache.get_compute_pipeline(id).is_some())
     }
 }
 
 fn variant(world: &mut World, channels: Channels) -> TemporalVariant {
     let float = || texture_2d(TextureSampleType::Float { filterable: false });
-    let (format, label, shader_defs) = match channels {
+    let (format, label, shader_defs): (_, _, Vec<ShaderDefVal>) = match channels {
         Channels::One => (OCCLUSION_FORMAT, "dynamic_ao_temporal", vec![]),
         Channels::Pair => (
             OCCLUSION_PAIR_FORMAT,
@@ -83,18 +102,32 @@ fn variant(world: &mut World, channels: Channels) -> TemporalVariant {
         ),
     );
     let shader = load_embedded_asset!(world, "temporal.wgsl");
-    let pipeline =
-        world
-            .resource::<PipelineCache>()
-            .queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some(format!("{label}_pipeline").into()),
-                layout: vec![layout.clone()],
-                shader,
-                shader_defs,
-                entry_point: Some("accumulate".into()),
-                ..default()
-            });
-    TemporalVariant { layout, pipeline }
+    let cache = world.resource::<PipelineCache>();
+    let queue = |clamp: bool| {
+        let mut shader_defs = shader_defs.clone();
+        let name = if clamp {
+            shader_defs.push("CLAMP".into());
+            format!("{label}_pipeline")
+        } else {
+            format!("{label}_unclamped_pipeline")
+        };
+        cache.queue_compute_pipeline(ComputePipelineDescriptor {
+            label: Some(name.into()),
+            layout: vec![layout.clone()],
+            shader: shader.clone(),
+            shader_defs,
+            entry_point: Some("accumulate".into()),
+            ..default()
+        })
+    };
+    let clamped = queue(true);
+    // The voxel term clamps every frame.
+    let unclamped = (channels == Channels::One).then(|| queue(false));
+    TemporalVariant {
+        layout,
+        clamped,
+        unclamped,
+    }
 }
 
 impl FromWorld for TemporalPipeline {

@@ -4,7 +4,9 @@
 // that place, each kept only where its depth and normal match this surface (a disocclusion keeps
 // none), and clamped around this frame's values on the same plane nearby, so a
 // change the motion vectors do not show (a shadow whose occluder moved away) leaves no trail.
-// The image-space history is clamped on every other frame only (`temporal/mod.rs`, "Ghosting").
+// The image-space history is clamped on every other frame only (`temporal/mod.rs`, "Ghosting"),
+// by the pipeline compiled with CLAMP (PAIR's always is); the frames between run one without the
+// clamp's tile and window (`temporal/pipeline.rs`, `TemporalVariant::unclamped`).
 // Under the ray march's checkerboard, a texel the march skipped this frame keeps its history
 // without a new sample (`temporal/mod.rs`, "Checkerboard").
 
@@ -19,8 +21,6 @@ struct TemporalUniform {
     max_frames: f32,
     // Full-resolution pixels per texel of the accumulated texture, along each axis (1 or 2).
     scale: u32,
-    // 1: the history is clamped this frame (every other frame; always with PAIR).
-    clamp: u32,
     // Under the ray march's checkerboard, the view's place in its sample sequence: the march
     // wrote texel t this frame where t.x and t.y + frame agree in parity (`march.wgsl`). 0 where
     // every texel was written.
@@ -243,10 +243,23 @@ fn mean_bounds(local: vec2<i32>, tolerance: f32) -> array<vec2<f32>, 2> {
     );
 }
 
+// This frame's value and reverse-Z depth of texel `q`, the neighbour `offset` (within the
+// window) away from the workgroup's texel `local`: from the tile where the pass filled one (half
+// floats, as the clamp reads them), else from the textures. Image-space occlusion only.
+fn neighbour(q: vec2<i32>, local: vec2<i32>, offset: vec2<i32>, full: vec2<i32>) -> vec2<f32> {
+#ifdef CLAMP
+    return tile_at(tile_index(local, offset));
+#else
+    let d = textureLoad(front_depth, min(q * i32(temporal.scale), full - 1), 0);
+    return vec2<f32>(load_value(q).x, d);
+#endif
+}
+
 // For a texel the march skipped this frame and that has no history: the mean of this frame's
 // values of its four neighbours (all marched) on its surface, or `fallback` where none is.
 fn neighbours_mean(
     texel: vec2<i32>,
+    local: vec2<i32>,
     dims: vec2<i32>,
     full: vec2<i32>,
     z: f32,
@@ -261,11 +274,11 @@ fn neighbours_mean(
         if any(q < vec2<i32>(0)) || any(q >= dims) {
             continue;
         }
-        let d = textureLoad(front_depth, min(q * i32(temporal.scale), full - 1), 0);
-        if d <= 0.0 || abs(linear_depth(view, d) - z) > DEPTH_TOLERANCE * z {
+        let v = neighbour(q, local, offset, full);
+        if v.y <= 0.0 || abs(linear_depth(view, v.y) - z) > DEPTH_TOLERANCE * z {
             continue;
         }
-        sum += load_value(q);
+        sum += vec2<f32>(v.x, 0.0);
         count += 1.0;
     }
     return select(fallback, sum / max(count, 1.0), count > 0.0);
@@ -282,16 +295,11 @@ fn accumulate(
     let full = vec2<i32>(textureDimensions(front_depth));
     let texel = vec2<i32>(id.xy);
     let local = vec2<i32>(local_id.xy);
-#ifdef PAIR
-    let clamping = true;
-#else
-    let clamping = temporal.clamp != 0u;
+#ifdef CLAMP
+    // Every lane helps fill the tile, those past the texture's edge included.
+    load_tile(texel - local, i32(lane), dims, full);
+    workgroupBarrier();
 #endif
-    if clamping {
-        // Every lane helps fill the tile, those past the texture's edge included.
-        load_tile(texel - local, i32(lane), dims, full);
-        workgroupBarrier();
-    }
     if any(texel >= dims) {
         return;
     }
@@ -310,10 +318,11 @@ fn accumulate(
     let bounds = range_bounds(local, value);
     let cut = 0.0;
 #else
-    var bounds = array<vec2<f32>, 2>(vec2<f32>(0.0), vec2<f32>(1.0));
-    if clamping {
-        bounds = mean_bounds(local, plane_tolerance(z, depth));
-    }
+#ifdef CLAMP
+    let bounds = mean_bounds(local, plane_tolerance(z, depth));
+#else
+    let bounds = array<vec2<f32>, 2>(vec2<f32>(0.0), vec2<f32>(1.0));
+#endif
     let cut = CUT;
 #endif
     let lo = bounds[0];
@@ -359,10 +368,12 @@ fn accumulate(
         result = vec2<f32>(0.0);
         count = 0.0;
     } else if weight < 0.01 {
+#ifndef PAIR
         if !marched {
-            result = neighbours_mean(texel, dims, full, z, value);
+            result = neighbours_mean(texel, local, dims, full, z, value);
             count = 0.5;
         }
+#endif
     } else {
         let previous = history / weight;
         count = min(frames / weight + select(0.0, 1.0, marched), temporal.max_frames);

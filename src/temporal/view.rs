@@ -28,7 +28,6 @@ pub(super) struct TemporalUniform {
     pub reset: u32,
     pub max_frames: f32,
     pub scale: u32,
-    pub clamp: u32,
     pub frame: u32,
 }
 
@@ -72,6 +71,12 @@ impl TemporalHistory {
         (&self.textures[self.read].1, &self.textures[1 - self.read].1)
     }
 
+    /// Whether the image-space history is clamped this frame: on the frames that read texture 0,
+    /// every other frame (why: the module's docs, "Ghosting").
+    pub(super) fn clamps(&self) -> bool {
+        self.read == 0
+    }
+
     /// The history this frame writes: once the temporal pass has run, each texel holds the
     /// accumulated occlusion, its linear depth and frame count (f32 bits) and its normal
     /// (4 × 8-bit snorm), read as a `texture_2d<u32>`.
@@ -90,13 +95,10 @@ impl TemporalHistory {
     ) -> Option<TemporalHistory> {
         let key = history_key(frame.settings);
         let reset = frame.settings.temporal.reset || !frame.motion_vectors;
-        // The image-space clamp runs on the frames that read texture 0, every other frame (why:
-        // the module's docs, "Ghosting").
-        let uniform = |reset: bool, read: usize| TemporalUniform {
+        let uniform = |reset: bool| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
             scale: frame.scale,
-            clamp: u32::from(read == 0),
             frame: frame.frame,
         };
         match history {
@@ -104,7 +106,7 @@ impl TemporalHistory {
                 history.read = 1 - history.read;
                 let reset = reset || history.settings != key;
                 history.settings = key;
-                history.uniform.set(uniform(reset, history.read));
+                history.uniform.set(uniform(reset));
                 history.uniform.write_buffer(device, queue);
                 None
             }
@@ -116,7 +118,7 @@ impl TemporalHistory {
                     settings: key,
                     uniform: UniformBuffer::default(),
                 };
-                history.uniform.set(uniform(true, 0));
+                history.uniform.set(uniform(true));
                 history.uniform.write_buffer(device, queue);
                 Some(history)
             }

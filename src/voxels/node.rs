@@ -110,7 +110,7 @@ pub(crate) fn voxel_pass(
 
     if let (Some(bind_group), Some(accumulate)) = (
         &bind_groups.temporal,
-        pipeline_cache.get_compute_pipeline(temporal.pair.pipeline),
+        pipeline_cache.get_compute_pipeline(temporal.pair.clamped),
     ) {
         let step = ComputeStep {
             label: "dynamic_ao_voxel_temporal",
