@@ -1,7 +1,8 @@
 //! The pass that runs the image-space technique of each view: [`near_field`](crate::near_field),
 //! [`horizon`](crate::horizon) or [`ray_march`](crate::ray_march). All three read the same
 //! bindings (view, settings, both ND-buffer layers) and write the same occlusion buffer, so they
-//! share one layout, one bind group per view and one pass; only the shader differs.
+//! share one layout, one bind group per view and one pass; only the shader differs, compiled for
+//! the resolution of the view's occlusion buffer.
 
 use bevy::app::{App, Plugin};
 use bevy::core_pipeline::schedule::Core3d;
@@ -54,7 +55,7 @@ fn wait_for_image_space(
             AoTechnique::Off => true,
             AoTechnique::BevySsao => false,
             technique => pipelines
-                .pipeline(technique)
+                .pipeline(technique, view.half_resolution)
                 .is_some_and(|id| pipeline_cache.get_compute_pipeline(id).is_some()),
         };
         pending.wait_for(ready);

@@ -32,7 +32,7 @@ pub(super) fn image_space_pass(
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
         pipelines
-            .pipeline(ao_view.technique())
+            .pipeline(ao_view.technique(), ao_view.half_resolution)
             .and_then(|id| pipeline_cache.get_compute_pipeline(id)),
     ) else {
         return;

@@ -19,24 +19,39 @@ use crate::view::{
     ViewBindings,
 };
 
-/// One compute pipeline per image-space technique, over one layout.
+/// One compute pipeline per image-space technique and resolution, over one layout. All six are
+/// compiled when the renderer starts (a fraction of a second on a CPU rasterizer), so that a
+/// camera switching technique or resolution at run time has its pipeline at once: one compiling
+/// meanwhile would leave the view's passes off for those frames, and its history stale.
 #[derive(Resource)]
 pub(crate) struct ImageSpacePipelines {
     layout: BindGroupLayoutDescriptor,
-    near_field: CachedComputePipelineId,
-    horizon: CachedComputePipelineId,
-    ray_march: CachedComputePipelineId,
+    /// Near field, horizon and ray march, each at full and at half resolution.
+    pipelines: [[CachedComputePipelineId; 2]; 3],
 }
 
+/// The image-space techniques, in the order of [`ImageSpacePipelines`].
+const TECHNIQUES: [(AoTechnique, &str); 3] = [
+    (AoTechnique::NearField, "near_field"),
+    (AoTechnique::Horizon, "horizon"),
+    (AoTechnique::RayMarch, "ray_march"),
+];
+
 impl ImageSpacePipelines {
-    /// The pipeline of `technique`, if it is an image-space one.
-    pub fn pipeline(&self, technique: AoTechnique) -> Option<CachedComputePipelineId> {
-        match technique {
-            AoTechnique::NearField => Some(self.near_field),
-            AoTechnique::Horizon => Some(self.horizon),
-            AoTechnique::RayMarch => Some(self.ray_march),
-            AoTechnique::Off | AoTechnique::BevySsao => None,
-        }
+    /// The pipeline of `technique` with an occlusion buffer at half the view's resolution or at
+    /// full, if the technique is an image-space one. At half resolution (`HALF_RESOLUTION` in
+    /// `shaders/image_space_bindings.wgsl`) the receivers' pixels follow from a constant and the
+    /// copies of the normals for the blur, which the upsampling writes then, are compiled out:
+    /// behind a flag in the uniform, lavapipe ran their reads and stores under a mask on every
+    /// texel (the ray march about 4% shorter without them; BENCHMARKS.md, "The resolution
+    /// compiled in").
+    pub fn pipeline(
+        &self,
+        technique: AoTechnique,
+        half_resolution: bool,
+    ) -> Option<CachedComputePipelineId> {
+        let index = TECHNIQUES.iter().position(|(t, _)| *t == technique)?;
+        Some(self.pipelines[index][usize::from(half_resolution)])
     }
 }
 
@@ -60,31 +75,28 @@ impl FromWorld for ImageSpacePipelines {
             ),
         );
         let shaders = [
-            (
-                "dynamic_ao_near_field_pipeline",
-                crate::near_field::shader(world),
-            ),
-            ("dynamic_ao_horizon_pipeline", crate::horizon::shader(world)),
-            (
-                "dynamic_ao_ray_march_pipeline",
-                crate::ray_march::shader(world),
-            ),
+            crate::near_field::shader(world),
+            crate::horizon::shader(world),
+            crate::ray_march::shader(world),
         ];
         let cache = world.resource::<PipelineCache>();
-        let [near_field, horizon, ray_march] = shaders.map(|(label, shader)| {
-            cache.queue_compute_pipeline(ComputePipelineDescriptor {
-                label: Some(label.into()),
-                layout: vec![layout.clone()],
-                shader,
-                ..default()
+        let pipelines = std::array::from_fn(|t| {
+            let (_, name) = TECHNIQUES[t];
+            [(false, ""), (true, "_half_resolution")].map(|(half, resolution)| {
+                cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                    label: Some(format!("dynamic_ao_{name}{resolution}_pipeline").into()),
+                    layout: vec![layout.clone()],
+                    shader: shaders[t].clone(),
+                    shader_defs: if half {
+                        vec!["HALF_RESOLUTION".into()]
+                    } else {
+                        vec![]
+                    },
+                    ..default()
+                })
             })
         });
-        Self {
-            layout,
-            near_field,
-            horizon,
-            ray_march,
-        }
+        Self { layout, pipelines }
     }
 }
 

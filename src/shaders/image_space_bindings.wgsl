@@ -20,6 +20,15 @@
 // layer encodes them. At half resolution the upsampling writes it.
 @group(0) @binding(7) var blur_normals: texture_storage_2d<rgba16float, write>;
 
+// Full-resolution pixels per texel of the occlusion buffer along each axis, compiled in
+// (`image_space::pipeline::ImageSpacePipelines`): read from the uniform, the branches on it still cost
+// their reads and stores on lavapipe, which runs an `if`'s body under a mask.
+#ifdef HALF_RESOLUTION
+const RESOLUTION_SCALE: u32 = 2u;
+#else
+const RESOLUTION_SCALE: u32 = 1u;
+#endif
+
 // View-space position at viewport coordinates `uv` (0..1, y down) and reverse-Z depth `depth`.
 fn view_position_at(uv: vec2<f32>, depth: f32) -> vec3<f32> {
     return position_in_view(view, uv, depth);
@@ -53,17 +62,19 @@ struct Receiver {
 // Copies the front layer's normal at `pixel` into `blur_normals` at full resolution, for a pixel
 // no receiver is made for this frame (the ray march's checkerboard skips it).
 fn copy_blur_normal(pixel: vec2<i32>) {
-    if settings.resolution_scale != 1u || any(pixel >= vec2<i32>(textureDimensions(front_depth))) {
+#ifndef HALF_RESOLUTION
+    if any(pixel >= vec2<i32>(textureDimensions(front_depth))) {
         return;
     }
     textureStore(blur_normals, pixel, vec4<f32>(textureLoad(front_normal, pixel, 0).xyz, 0.0));
+#endif
 }
 
 // The receiver of `invocation`. At half resolution each invocation computes the full-resolution
 // pixel at twice its index and writes one texel of the half-size buffer.
 fn receiver(invocation: vec3<u32>) -> Receiver {
     var r: Receiver;
-    let id = invocation.xy * settings.resolution_scale;
+    let id = invocation.xy * RESOLUTION_SCALE;
     let dims = textureDimensions(front_depth);
     r.out_pixel = vec2<i32>(invocation.xy);
     r.pixel = vec2<i32>(id);
@@ -74,9 +85,9 @@ fn receiver(invocation: vec3<u32>) -> Receiver {
     }
     r.depth = textureLoad(front_depth, r.pixel, 0);
     let encoded = textureLoad(front_normal, r.pixel, 0).xyz;
-    if settings.resolution_scale == 1u {
-        textureStore(blur_normals, r.pixel, vec4<f32>(encoded, 0.0));
-    }
+#ifndef HALF_RESOLUTION
+    textureStore(blur_normals, r.pixel, vec4<f32>(encoded, 0.0));
+#endif
     r.normal = decode_normal(encoded);
     if r.depth <= 0.0 || dot(r.normal, r.normal) == 0.0 {
         return r;

@@ -40,8 +40,6 @@ struct DynamicAoUniform {
     ray_march_thickness: f32,
     // 1 when the ray march marches one texel of two each frame, a checkerboard that alternates.
     ray_march_checkerboard: u32,
-    // 1 at full resolution, 2 at half resolution.
-    resolution_scale: u32,
     // Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 at half
     // resolution (compose upsamples them, `joint_upsample`).
     far_resolution_scale: u32,

@@ -56,8 +56,6 @@ pub(crate) struct DynamicAoUniform {
     /// 1 when the ray march marches one texel of two each frame
     /// ([`crate::RayMarchParams::checkerboard`]).
     pub ray_march_checkerboard: u32,
-    /// 1 at full resolution, 2 at half resolution.
-    pub resolution_scale: u32,
     /// Pixels per texel of the sphere and field splats' buffers in each axis: 1, or 2 where they
     /// run at half resolution (compose upsamples them).
     pub far_resolution_scale: u32,
@@ -224,7 +222,6 @@ pub(super) fn extract_views(
                 ray_march_steps: rays.steps,
                 ray_march_thickness: rays.thickness * near_radius,
                 ray_march_checkerboard: u32::from(checkerboard),
-                resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 far_resolution_scale: if ao.half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),
                 far_field_blend: ao.far_field_blend.shader_index(),
