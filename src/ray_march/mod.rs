@@ -3,7 +3,8 @@
 //!
 //! From each pixel, `directions × elevations` rays leave over the hemisphere around the
 //! normal, stratified so that they follow the cosine weighting of the AO integral; each is
-//! marched in `steps` equal steps over the radius R, starting above the surface by a pixel's width
+//! marched in `steps` steps of R / `steps`, each at an offset into its stride but the last, which
+//! lies at R itself (a surface met in the last stride counts), starting above the surface by a pixel's width
 //! times the sine of the angle between the normal and the direction to the eye (a surface seen at
 //! a grazing angle changes depth within a pixel by as much as a point half a pixel's width above
 //! it is nearer, so lower steps would read as hidden; one facing the camera does not, and rays

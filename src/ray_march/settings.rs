@@ -4,7 +4,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 
 /// Parameters of the ray-marched reference (Bavoil & Sainz 2008, "Ray-Marched Ambient
 /// Occlusion"): `directions × elevations` cosine-weighted rays around the normal, each
-/// marched in `steps` equal steps over the radius R ([`DynamicAo::radius`](crate::DynamicAo::radius)). A step is blocked
+/// marched in `steps` steps of R / `steps` ([`DynamicAo::radius`](crate::DynamicAo::radius)), the last at R itself. A step is blocked
 /// where it lies behind the front layer and less than `thickness × R` behind the back-face
 /// layer (or, where no back face was drawn, less than R behind the front layer). Under temporal accumulation the rays'
 /// rotation, elevations and step offsets move every frame, so the default 2 rays of 6 steps

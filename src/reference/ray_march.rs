@@ -143,6 +143,17 @@ fn start_height(view: &ViewMatrices, p: Vec3, n: Vec3, footprint: f32) -> f32 {
     footprint * (1.0 - cos_view * cos_view).sqrt()
 }
 
+/// Where step `s` of `steps` samples a ray, metres along it, and how far it lies from the step
+/// before: `offset` of a `step` into its stride (0.5, the accumulated march's frame 0), the last
+/// at `radius` itself.
+fn step_at(s: u32, steps: u32, offset: f32, step: f32, radius: f32) -> (f32, f32) {
+    if s + 1 == steps {
+        (radius, radius - (s as f32 - 1.0 + offset) * step)
+    } else {
+        ((s as f32 + offset) * step, step)
+    }
+}
+
 /// Occlusion of one pixel.
 pub fn pixel_occlusion(
     nd: &NdBuffer,
@@ -171,9 +182,9 @@ pub fn pixel_occlusion(
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
             let mut on_screen = 0.0;
             for s in 0..inputs.steps {
-                let t = (s as f32 + 0.5) / inputs.steps as f32 * inputs.radius;
-                let previous_z = origin.z + dir.z * (t - step).max(0.0);
-                let state = blocked(nd, view, origin + dir * t, previous_z, step, inputs);
+                let (t, stride) = step_at(s, inputs.steps, 0.5, step, inputs.radius);
+                let previous_z = origin.z + dir.z * (t - stride).max(0.0);
+                let state = blocked(nd, view, origin + dir * t, previous_z, stride, inputs);
                 if state == -1 {
                     let edge = beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius);
                     hits += u32::from(edge);
@@ -188,4 +199,34 @@ pub fn pixel_occlusion(
     }
     let total = (inputs.directions * inputs.elevations) as f32;
     (inputs.intensity * hits as f32 / total).clamp(0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::step_at;
+
+    #[test]
+    fn the_steps_reach_the_radius_in_order_whatever_the_offset() {
+        let (steps, radius) = (6, 0.75);
+        let step = radius / steps as f32;
+        for offset in [0.0, 0.25, 0.5, 0.999] {
+            let mut previous = 0.0;
+            for s in 0..steps {
+                let (t, stride) = step_at(s, steps, offset, step, radius);
+                assert!(
+                    t > previous || (s == 0 && t == 0.0),
+                    "step {s} at {t} after {previous}"
+                );
+                if s > 0 {
+                    assert!(
+                        (t - stride - previous).abs() < 1e-6,
+                        "stride {stride} at step {s}"
+                    );
+                }
+                assert!(t <= radius);
+                previous = t;
+            }
+            assert_eq!(previous, radius, "offset {offset}: the last step lies at R");
+        }
+    }
 }

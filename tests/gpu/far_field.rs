@@ -217,11 +217,13 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// Each term joined to the crate's default image-space technique (the accumulated ray march) on
 /// characters standing on a floor, every mesh an occluder: never worse than the default alone at
 /// 0.75 m, but for the walker's voxels (at most 5% worse), and at 2 m, where most of what occludes
-/// a character lies beyond the near field's reach, at least a tenth better. Measured, the default
+/// a character lies beyond the near field's reach, at least a tenth better, but for the voxels
+/// (at least 7%: the walker 0.0251 against the default's 0.0275, 0.91×, CesiumMan 0.0237 against
+/// 0.0262, 0.90×, since the default's rays' last step lies at R; under 0.9× before). Measured, the default
 /// converged over 64 frames: at 0.75 m the walker's error falls by 4% with spheres and 2% with
 /// fields and holds with voxels (0.0245 against 0.0245; it rose by 4% while the temporal clamp
 /// pulled a plane's edge toward the plane's inside, by 2% when this test took 60 frames),
-/// CesiumMan's falls by 3–8%; at 2 m they fall by 12–26%. Before the ray march counted steps
+/// CesiumMan's falls by 3–8%; at 2 m they fall by 12–26% (the voxels 9–10% since the last step lies at R). Before the ray march counted steps
 /// just behind the back-face layer as blocked the default alone was farther from the truth and
 /// the far field's share larger (7–19%, 11–15%, 27–44%); joined, CesiumMan's error has fallen
 /// since and the walker's risen by 8–10% (its limbs are closed solids with air between them). CesiumMan needs `../shared/assets`.
@@ -256,8 +258,12 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
                 }
             },
         );
-        check_joined(&mut run, &bvh, scene.name, "default", 2.0, |_, alone| {
-            0.9 * alone
+        check_joined(&mut run, &bvh, scene.name, "default", 2.0, |term, alone| {
+            if term == FarTerm::Voxels {
+                0.93 * alone
+            } else {
+                0.9 * alone
+            }
         });
     }
 }
@@ -273,8 +279,11 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// 1.10× (in the order below), on the bumpy ring 1.06× joined to the near field at 0.75 m.
 /// Joined to the near field each term must lower the error at both radii, joined to the default
 /// at 0.75 m; at 2 m the default alone does better than either joined. Measured here, joined
-/// against alone, near field at 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.74×,
-/// 1.43×; fields 0.70×, 0.55×, 0.67×, 1.02×. The default alone at 2 m reads 0.0211 since the ray
+/// against alone, near field at 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.96×,
+/// 1.53×; fields 0.70×, 0.55×, 0.80×, 0.97× (the default's 0.74×, 1.43×, 0.67× and 1.02× before
+/// its rays' last step lay at R: that lowered the default alone at 0.75 m to 0.0293, more than
+/// the joined images, whose march stops at `near_field_radius`). The default alone at 2 m reads
+/// 0.0210 since the ray
 /// march continues the surface at the screen's edge past it (0.0416 before, when proxies took it
 /// to 0.73× and the field to 0.55×; 0.0238 while the temporal clamp pulled a plane's edge toward
 /// the plane's inside, when the spheres read 1.26× and the field 0.95×): joined, count-once
@@ -308,7 +317,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.78), (2.0, 1.45)],
+            [(0.75, 0.98), (2.0, 1.56)],
         ),
         (
             FarTerm::Fields,
@@ -320,7 +329,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Fields,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.71), (2.0, 1.04)],
+            [(0.75, 0.82), (2.0, 1.04)],
         ),
     ];
     let mut failed = Vec::new();

@@ -175,14 +175,16 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
     };
     // Each scene with the most its RMSE may be, as a share of its RMSE at thickness 0: 8 × 4
     // rays in one frame, and the default converged (`converged_frames`: 64 frames under the
-    // checkerboard). Measured: 0.60 / 0.64, 1.04 / 0.96, 0.99 / 0.97, 0.98 / 0.86,
-    // 0.75 / 0.77 (cube on plane's default 0.0128 against 0.0133: on its open floor the
-    // thickness changes little, and the two converged images differ by their noise as much).
+    // checkerboard). Measured: 0.59 / 0.62, 1.08 / 1.00, 0.98 / 0.89, 1.02 / 0.92, 0.73 / 0.75
+    // since the rays' last step lies at R (before: 0.60 / 0.64, 1.04 / 0.96, 0.99 / 0.97,
+    // 0.98 / 0.86, 0.75 / 0.77). On cube on plane's open floor and beside the ball the thickness
+    // changes little (the default 0.0102 either way on cube on plane), and the two images differ
+    // by their noise as much.
     let scenes = [
         ("shells on floor", scenes::shells_on_floor(), 0.62, 0.65),
-        ("cube on plane", scenes::cube_on_plane(), 1.05, 0.97),
+        ("cube on plane", scenes::cube_on_plane(), 1.1, 1.02),
         ("room corner", scenes::room_corner(), 1.0, 0.98),
-        ("ball near wall", scenes::ball_near_wall(), 1.0, 0.91),
+        ("ball near wall", scenes::ball_near_wall(), 1.04, 0.94),
         ("open room", scenes::open_room(), 0.77, 0.79),
     ];
     for (name, scene, many_rays_bound, default_bound) in scenes {
@@ -245,20 +247,23 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
     // joined, over both radii. Measured (0.75 m, 2 m; the default converged over 64 frames under
-    // its checkerboard): the walker 1.05×, 0.77× alone and 1.19×, 1.13× joined (its limbs are
-    // closed solids with air between them, which the thickness counts as solid); the box and the
-    // wall outside the view 1.00× (the rays that would find them leave the screen); DamagedHelmet
-    // 0.85×, 0.80× and 0.94×, 0.93×; CesiumMan 0.83×, 0.81× and 0.92×, 1.00×; the Cornell box,
-    // walls of one polygon, 0.70×, 0.72× and 0.72×, 0.91×. The walker read 0.98×, 0.81× and
+    // its checkerboard, its rays' last step at R): the walker 1.06×, 0.75× alone and 1.19×,
+    // 1.14× joined (its limbs are closed solids with air between them, which the thickness
+    // counts as solid); the box and the wall outside the view 1.00× (the rays that would find
+    // them leave the screen); DamagedHelmet 0.84×, 0.79× and 0.96×, 0.97×; CesiumMan 0.88×,
+    // 0.78× and 0.91×, 1.00×; the Cornell box, walls of one polygon, 0.70×, 0.74× and 0.73×,
+    // 0.91×. Before the last step lay at R: the walker 1.05×, 0.77× and 1.19×, 1.13×;
+    // DamagedHelmet 0.85×, 0.80× and 0.94×, 0.93×; CesiumMan 0.83×, 0.81× and 0.92×, 1.00×; the
+    // Cornell box 0.70×, 0.72× and 0.72×, 0.91×. The walker read 0.98×, 0.81× and
     // 1.09×, 1.11× while the temporal clamp pulled a plane's edge toward the plane's inside (a
     // blur that softened the thickness's excess between the limbs; `temporal.wgsl`,
     // `mean_bounds`), and 1.11×, 0.81× and 1.18×, 1.16× before the checkerboard.
     let bounds = [
-        ("walker on floor", 1.06, 1.2),
+        ("walker on floor", 1.07, 1.2),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
-        ("DamagedHelmet on floor", 0.93, 0.96),
-        ("CesiumMan on floor", 0.88, 1.01),
+        ("DamagedHelmet on floor", 0.93, 0.98),
+        ("CesiumMan on floor", 0.9, 1.01),
         ("CornellBox on floor", 0.75, 0.92),
     ];
     let shared = crate::models::shared_assets();

@@ -371,10 +371,12 @@ fn msaa_sees_through_an_alpha_masked_grille() {
     // sides and the rectangle's edges take another surface's normal, and the blur's fine-detail
     // term, which reads the depth beside each pixel, darkens them by another amount (0.0018 and
     // 0.0055 before the term; 0.0033 and 0.0104 while the temporal clamp pulled a plane's edge
-    // toward the plane's inside, which also evened out those pixels).
-    assert!(error <= 0.0042, "MSAA against plain RMSE {error}");
+    // toward the plane's inside, which also evened out those pixels). 0.0046 and 0.0145 since
+    // each ray's last step lies at R: the rays of those pixels reach R on every frame, and
+    // what they meet there differs between the two layers' surfaces more often.
+    assert!(error <= 0.0049, "MSAA against plain RMSE {error}");
     assert!(
-        grille_error <= 0.013,
+        grille_error <= 0.0155,
         "MSAA against plain RMSE {grille_error} on the grille"
     );
     let msaa_bars = covered(&msaa);
