@@ -14,7 +14,8 @@
 // Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
 // geometry the two layers bound, less than `settings.ray_march_thickness` metres behind the
 // back-face layer, or behind a sheet thinner than a step (`step`, metres) that the previous step,
-// at depth `previous_z`, lay in front of.
+// at depth `previous_z`, lay in front of: 1 blocked, 0 free behind the front layer, 2 free in
+// front of it (or where it holds nothing), −1 off the screen.
 fn blocked(
     z: f32,
     previous_z: f32,
@@ -41,7 +42,7 @@ fn blocked(
     // tolerance (it was a hundredth of R) hid grooves shallower than it, many pixels wide at high
     // resolutions.
     if front <= 0.0 || ndc.z >= front {
-        return 0;
+        return 2;
     }
     let back = textureLoad(back_depth, q, 0);
     let front_z = -linear_depth(view, front);
@@ -62,6 +63,79 @@ fn blocked(
         return select(0, 1, crossed);
     }
     return select(0, 1, front_z - z < radius);
+}
+
+// How far, in view-space z, a ray's crossing of a sheet's plane may lie outside the sheet the
+// layers hold where it crosses (`came_through_from_behind`), as a share of a step: the sheet is
+// a plane only near the pixel that showed it.
+const SHEET_TOLERANCE: f32 = 0.05;
+
+// Whether a ray now at view-space `point` (clip-space `point_clip`), in front of the surface the
+// front layer shows there, came through that surface from behind since its previous step, at
+// `previous` (`previous_clip`), `step` metres back: the surface is a sheet thinner than a step;
+// `previous` lies behind the plane of its back face and `point` in front of the plane of its
+// front face (both with the front layer's normal); and where the ray crosses the back face's
+// plane, the front layer shows the sheet again. A ray from a heat sink's fin towards the camera
+// goes through the next fin with no step inside it, from hidden to in front, and read as open:
+// the fins' faces were lighter than the truth all over (RMSE at 640×480 0.0716, 0.0435 with
+// this; BENCHMARKS.md, "Rays through a sheet towards the camera, in the default"). The sides are
+// told by planes, not depths: the steps either side project to other pixels, and across a sheet
+// seen at a grazing angle the depth changes faster than along the ray. The sheet must be thin:
+// without the back face, rays from the valleys of a bumpy ring crossed the tangent planes of the
+// bumps before them and darkened the valleys. The crossing is checked because the plane runs on
+// past the sheet's edges: with the plane alone, rays passing beside CesiumMan's limbs counted as
+// blocked. The march tests one step a ray, after its loop (the first in front of the front layer
+// after the start or a hidden step): tested at every step in front, the test doubled the march's
+// time on lavapipe, which runs every branch; once a ray it costs about a fifth more there.
+fn came_through_from_behind(
+    point: vec3<f32>,
+    previous: vec3<f32>,
+    point_clip: vec4<f32>,
+    previous_clip: vec4<f32>,
+    step: f32,
+    size: vec2<f32>,
+) -> bool {
+    let q = vec2<i32>(floor(ndc_to_uv(point_clip.xy / point_clip.w) * size));
+    let front = textureLoad(front_depth, q, 0);
+    let back = textureLoad(back_depth, q, 0);
+    if front <= 0.0 || back <= 0.0 {
+        return false;
+    }
+    // The two faces where the line of sight through `point` meets them, as the pixel holds them.
+    let orthographic = view.clip_from_view[3][3] == 1.0;
+    let f = along_sight(point, -linear_depth(view, front), orthographic);
+    let b = along_sight(point, -linear_depth(view, back), orthographic);
+    let world_normal = decode_normal(textureLoad(front_normal, q, 0).xyz);
+    let m = (view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz;
+    let to_eye = select(-f, vec3<f32>(0.0, 0.0, 1.0), orthographic);
+    let up = select(m, -m, dot(m, to_eye) < 0.0);
+    let before = dot(previous - b, up);
+    let after = dot(point - b, up);
+    if !(dot(f - b, up) < step && before < 0.0 && dot(point - f, up) > 0.0) {
+        return false;
+    }
+    // Clip space is linear along the ray.
+    let share = before / (before - after);
+    let crossing_z = mix(previous.z, point.z, share);
+    let c = mix(previous_clip, point_clip, share);
+    let at = vec2<i32>(floor(ndc_to_uv(c.xy / c.w) * size));
+    if c.w <= 0.0 || any(at < vec2<i32>(0)) || any(at >= vec2<i32>(size)) {
+        return false;
+    }
+    let front_there = textureLoad(front_depth, at, 0);
+    if front_there <= 0.0 {
+        return false;
+    }
+    // The sheet there, as deep along the line of sight as at `q`.
+    let front_z = -linear_depth(view, front_there);
+    let back_z = front_z - (f.z - b.z);
+    let tolerance = SHEET_TOLERANCE * step;
+    return crossing_z <= front_z + tolerance && crossing_z >= back_z - tolerance;
+}
+
+// The point at view-space depth `z` on the line of sight through view-space `p`.
+fn along_sight(p: vec3<f32>, z: f32, orthographic: bool) -> vec3<f32> {
+    return vec3<f32>(p.xy * select(z / p.z, 1.0, orthographic), z);
 }
 
 // Whether the ray from view-space `origin` along unit `dir` (clip-space `clip` and `clip_dir`),
@@ -205,14 +279,21 @@ fn march(r: Receiver, sequence: u32) -> f32 {
             // How far the ray got on screen, and where it left it (`beyond_the_edge`).
             var on_screen = 0.0;
             var left_at = -1.0;
+            var hit = false;
+            // The first step in front of the front layer after the start or a hidden step
+            // (`came_through_from_behind`); `ray_march_steps` while there is none.
+            var sheet = settings.ray_march_steps;
+            var was_hidden = true;
             for (var s = 0u; s < settings.ray_march_steps; s++) {
                 let at = step_at(s, settings.ray_march_steps, step_offset, step, radius);
                 let t = at.x;
                 let z = origin.z + dir.z * t;
                 let previous_z = origin.z + dir.z * max(t - at.y, 0.0);
                 let state = blocked(z, previous_z, at.y, clip + clip_dir * t, r.size, dims, radius);
-                if state != 0 {
-                    hits += u32(state == 1);
+                sheet = select(sheet, s, state == 2 && was_hidden && sheet == settings.ray_march_steps);
+                was_hidden = state == 0;
+                if state == 1 || state == -1 {
+                    hit = state == 1;
                     left_at = select(-1.0, t, state == -1);
                     break;
                 }
@@ -220,9 +301,20 @@ fn march(r: Receiver, sequence: u32) -> f32 {
             }
             // Once per ray, after its loop: CPU rasterizers run a branch inside the loop for
             // every step.
-            if left_at >= 0.0 {
-                hits += u32(beyond_the_edge(origin, dir, clip, clip_dir, on_screen, left_at, radius, r.size, dims));
+            if !hit && (sheet < settings.ray_march_steps || left_at >= 0.0) {
+                let at = step_at(sheet, settings.ray_march_steps, step_offset, step, radius);
+                let before = max(at.x - at.y, 0.0);
+                hit = (sheet < settings.ray_march_steps && came_through_from_behind(
+                    origin + dir * at.x,
+                    origin + dir * before,
+                    clip + clip_dir * at.x,
+                    clip + clip_dir * before,
+                    at.y,
+                    r.size,
+                )) || (left_at >= 0.0
+                    && beyond_the_edge(origin, dir, clip, clip_dir, on_screen, left_at, radius, r.size, dims));
             }
+            hits += u32(hit);
         }
     }
     var value = settings.intensity * f32(hits) / f32(directions * elevations);

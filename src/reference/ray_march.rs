@@ -23,47 +23,111 @@ pub struct RayMarchInputs {
     pub thickness: f32,
 }
 
+/// The pixel of a `width`×`height` viewport view-space `x` projects to, and its NDC depth;
+/// `None` behind the camera.
+fn project(view: &ViewMatrices, x: Vec3, width: u32, height: u32) -> Option<(IVec2, f32)> {
+    let clip = view.clip_from_view * x.extend(1.0);
+    if clip.w <= 0.0 {
+        return None;
+    }
+    let ndc = clip.xyz() / clip.w;
+    let q = IVec2::new(
+        ((ndc.x + 1.0) * 0.5 * width as f32).floor() as i32,
+        ((1.0 - ndc.y) * 0.5 * height as f32).floor() as i32,
+    );
+    Some((q, ndc.z))
+}
+
 /// 1 blocked (inside the solid the layers bound, less than `thickness` behind the back-face
-/// layer, or behind a sheet thinner than `step` that the previous step, at depth `previous_z`,
-/// lay in front of), 0 free, −1 left the screen.
+/// layer, or behind a sheet thinner than `step` that the previous step, at `previous`, lay in
+/// front of), 0 free behind the front layer, 2 free in front of it (or where it holds nothing),
+/// −1 left the screen.
 fn blocked(
     nd: &NdBuffer,
     view: &ViewMatrices,
     x: Vec3,
-    previous_z: f32,
+    previous: Vec3,
     step: f32,
     inputs: &RayMarchInputs,
 ) -> i32 {
     let (w, h) = (nd.width, nd.height);
-    let clip = view.clip_from_view * x.extend(1.0);
-    if clip.w <= 0.0 {
+    let Some((q, ndc_z)) = project(view, x, w, h) else {
         return -1;
-    }
-    let ndc = clip.xyz() / clip.w;
-    let q = IVec2::new(
-        ((ndc.x + 1.0) * 0.5 * w as f32).floor() as i32,
-        ((1.0 - ndc.y) * 0.5 * h as f32).floor() as i32,
-    );
+    };
     let (Some(front), Some(back)) = (nd.texel(false, q.x, q.y), nd.texel(true, q.x, q.y)) else {
         return -1;
     };
     // Stored reverse-Z depths, compared as the shader compares them (a larger depth is nearer).
-    if front.depth <= 0.0 || ndc.z >= front.depth {
-        return 0;
+    if front.depth <= 0.0 || ndc_z >= front.depth {
+        return 2;
     }
     let front_z = view.view_position(q.x, q.y, w, h, front.depth).z;
     if back.depth > 0.0 {
-        if ndc.z > back.depth {
+        if ndc_z > back.depth {
             return 1;
         }
         let back_z = view.view_position(q.x, q.y, w, h, back.depth).z;
         if back_z - x.z < inputs.thickness {
             return 1;
         }
-        let crossed = front_z - back_z < step && previous_z >= front_z;
+        let crossed = front_z - back_z < step && previous.z >= front_z;
         return i32::from(crossed);
     }
     i32::from(front_z - x.z < inputs.radius)
+}
+
+/// How far, in view-space z, a ray's crossing of a sheet's plane may lie outside the sheet the
+/// layers hold there, as a share of a step: `SHEET_TOLERANCE` in `march.wgsl`.
+const SHEET_TOLERANCE: f32 = 0.05;
+
+/// Whether a ray now at view-space `x`, in front of the surface the pixel it projects to shows,
+/// came through that surface from behind since its previous step at `previous`, `step` metres
+/// back: `came_through_from_behind` in `march.wgsl`, which says why.
+fn came_through_from_behind(
+    nd: &NdBuffer,
+    view: &ViewMatrices,
+    x: Vec3,
+    previous: Vec3,
+    step: f32,
+) -> bool {
+    let (w, h) = (nd.width, nd.height);
+    let Some((q, _)) = project(view, x, w, h) else {
+        return false;
+    };
+    let (Some(front), Some(back)) = (nd.texel(false, q.x, q.y), nd.texel(true, q.x, q.y)) else {
+        return false;
+    };
+    if front.depth <= 0.0 || back.depth <= 0.0 {
+        return false;
+    }
+    let orthographic = view.clip_from_view.w_axis.w == 1.0;
+    // The two faces where the line of sight through `x` meets them.
+    let along_sight = |depth: f32| {
+        let z = view.view_position(q.x, q.y, w, h, depth).z;
+        let scale = if orthographic { 1.0 } else { z / x.z };
+        (x.truncate() * scale).extend(z)
+    };
+    let (f, b) = (along_sight(front.depth), along_sight(back.depth));
+    let m = (view.view_from_world * front.normal.extend(0.0)).xyz();
+    let to_eye = if orthographic { Vec3::Z } else { -f };
+    let up = if m.dot(to_eye) < 0.0 { -m } else { m };
+    let before = (previous - b).dot(up);
+    let after = (x - b).dot(up);
+    if !((f - b).dot(up) < step && before < 0.0 && (x - f).dot(up) > 0.0) {
+        return false;
+    }
+    let crossing = previous.lerp(x, before / (before - after));
+    let Some((at, _)) = project(view, crossing, w, h) else {
+        return false;
+    };
+    let Some(front_there) = nd.texel(false, at.x, at.y).filter(|t| t.depth > 0.0) else {
+        return false;
+    };
+    // The sheet there, as deep along the line of sight as at `q`.
+    let front_z = view.view_position(at.x, at.y, w, h, front_there.depth).z;
+    let back_z = front_z - (f.z - b.z);
+    let tolerance = SHEET_TOLERANCE * step;
+    crossing.z <= front_z + tolerance && crossing.z >= back_z - tolerance
 }
 
 /// Occlusion (0 = open) of every pixel, row-major.
@@ -181,20 +245,36 @@ pub fn pixel_occlusion(
             let (sin_theta, cos_theta) = (u.sqrt(), (1.0 - u).sqrt());
             let dir = t1 * (sin_theta * phi.cos()) + t2 * (sin_theta * phi.sin()) + n * cos_theta;
             let mut on_screen = 0.0;
+            // The first step in front of the front layer after the start or a hidden step, and
+            // its stride (`came_through_from_behind`).
+            let mut sheet = None;
+            let mut left_at = None;
+            let mut hit = false;
+            let mut was_hidden = true;
             for s in 0..inputs.steps {
                 let (t, stride) = step_at(s, inputs.steps, 0.5, step, inputs.radius);
-                let previous_z = origin.z + dir.z * (t - stride).max(0.0);
-                let state = blocked(nd, view, origin + dir * t, previous_z, stride, inputs);
-                if state == -1 {
-                    let edge = beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius);
-                    hits += u32::from(edge);
+                let previous = origin + dir * (t - stride).max(0.0);
+                let state = blocked(nd, view, origin + dir * t, previous, stride, inputs);
+                if state == 2 && was_hidden && sheet.is_none() {
+                    sheet = Some((t, stride));
                 }
-                if state != 0 {
-                    hits += u32::from(state == 1);
+                was_hidden = state == 0;
+                if state == 1 || state == -1 {
+                    hit = state == 1;
+                    left_at = (state == -1).then_some(t);
                     break;
                 }
                 on_screen = t;
             }
+            // As the shader does, once per ray after its loop.
+            hit =
+                hit || sheet.is_some_and(|(t, stride)| {
+                    let previous = origin + dir * (t - stride).max(0.0);
+                    came_through_from_behind(nd, view, origin + dir * t, previous, stride)
+                }) || left_at.is_some_and(|t| {
+                    beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius)
+                });
+            hits += u32::from(hit);
         }
     }
     let total = (inputs.directions * inputs.elevations) as f32;

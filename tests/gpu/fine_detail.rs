@@ -106,11 +106,12 @@ fn steps_limit_the_default_on_fine_detail() {
         errors.push(error);
     }
     let steps = &errors[4..8];
-    // Measured: 0.037 / 0.035 / 0.034 / 0.035 at 8 / 16 / 32 / 64 steps (0.047 / 0.039 / 0.035 /
-    // 0.033 before steps just behind the back-face layer counted as blocked: that thickness
+    // Measured: 0.0365 / 0.0346 / 0.0345 / 0.0354 at 8 / 16 / 32 / 64 steps (0.037 / 0.035 /
+    // 0.034 / 0.035 before rays through a sheet towards the camera counted as blocked, and
+    // 0.047 / 0.039 / 0.035 / 0.033 before steps just behind the back-face layer did: each
     // stands in for some of what finer steps found).
     assert!(
-        steps[1] < 0.95 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
+        steps[1] < 0.96 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
         "more steps per ray should bring the ray march closer to the truth: {steps:?}"
     );
     // Measured: 2 × 16 steps 0.042 against the default's 2 × 6 steps 0.044 (0.053 against
@@ -534,12 +535,13 @@ fn the_fine_detail_term_holds_with_every_mesh_an_occluder() {
 
 /// Detail finer than a half-resolution texel, on a procedural scene (`scenes::heat_sink`): fins
 /// 8 mm thick with gaps of one to two pixels, and a grille of thin bars, on a floor. Converged,
-/// against the CPU ray tracer at Bevy's radius and at 2 m: the default keeps about 0.9× Bevy's
-/// SSAO High's high-frequency error (fin tops bright between dark gaps), under half its RMSE;
-/// at full resolution the fins keep most of their detail. The rays step over most fins, and
-/// half resolution loses the rest: this scene is where the default is furthest from the truth
-/// (BENCHMARKS.md, "Past the screen's edge, and fins", and "The upsampling against the pixel's
-/// plane").
+/// against the CPU ray tracer at Bevy's radius and at 2 m: the default keeps about 0.7× Bevy's
+/// SSAO High's high-frequency error (fin tops bright between dark gaps) and about a third of its
+/// RMSE; at full resolution the fins keep most of their detail. Rays towards the camera go
+/// through the next fin between two steps (`came_through_from_behind` in `march.wgsl`), and half
+/// resolution loses what is finer than a texel: this scene is where the default is furthest from
+/// the truth (BENCHMARKS.md, "Past the screen's edge, and fins", "The upsampling against the
+/// pixel's plane" and "Rays through a sheet towards the camera").
 #[test]
 fn fins_keep_their_detail() {
     let scene = crate::scenes::heat_sink();
@@ -574,25 +576,27 @@ fn fins_keep_their_detail() {
         ours / bevy,
         ours_hf / bevy_hf
     );
-    // Measured: 0.0823 / 0.0598 against Bevy's 0.1951 / 0.0796 (0.42× / 0.75×); at 2 m 0.1084
-    // / 0.0627 against 0.1978 / 0.0804 (0.55× / 0.78×); at full resolution 0.0691 / 0.0408.
-    // Before the upsampling added the fine-detail term between the texels: 0.0829 / 0.0610, at
+    // Measured: 0.0676 / 0.0550 against Bevy's 0.1951 / 0.0796 (0.35× / 0.69×); at 2 m 0.0869
+    // / 0.0571 against 0.1978 / 0.0804 (0.44× / 0.71×); at full resolution 0.0475 / 0.0320.
+    // Before rays through a fin towards the camera counted as blocked (`came_through_from_behind`
+    // in `march.wgsl`): 0.0823 / 0.0598 (0.42× / 0.75×), at 2 m 0.1084 / 0.0627, at full
+    // resolution 0.0691 / 0.0408. Before the upsampling added the fine-detail term between the texels: 0.0829 / 0.0610, at
     // 2 m 0.1091 / 0.0635 (BENCHMARKS.md, "Grooves between the texels"). While the temporal clamp pulled a plane's edge toward its inside: 0.0898 / 0.0704, at 2 m
     // 0.1128 / 0.0718, at full resolution 0.0777 / 0.0567 (BENCHMARKS.md, "The clamp at a
     // plane's edge"). Before the upsampling weighed each texel's distance from the pixel's
     // tangent plane instead of its world distance: 0.0958 / 0.0781 (0.98× Bevy's high-frequency
     // error), at 2 m 0.1146 / 0.0758 (BENCHMARKS.md, "The upsampling against the pixel's plane").
     assert!(
-        ours_hf < 0.78 * bevy_hf && ours_wide_hf < 0.82 * bevy_wide_hf,
+        ours_hf < 0.72 * bevy_hf && ours_wide_hf < 0.74 * bevy_wide_hf,
         "high-frequency error {ours_hf:.4} against Bevy's {bevy_hf:.4}, at 2 m {ours_wide_hf:.4} \
          against {bevy_wide_hf:.4}"
     );
     assert!(
-        ours < 0.44 * bevy && ours_wide < 0.57 * bevy_wide,
+        ours < 0.37 * bevy && ours_wide < 0.46 * bevy_wide,
         "RMSE {ours:.4} against Bevy's {bevy:.4}, at 2 m {ours_wide:.4} against {bevy_wide:.4}"
     );
     assert!(
-        full < 0.88 * ours && full_hf < 0.83 * ours_hf,
+        full < 0.74 * ours && full_hf < 0.62 * ours_hf,
         "full resolution {full:.4} / {full_hf:.4} against the default's {ours:.4} / {ours_hf:.4}"
     );
 }

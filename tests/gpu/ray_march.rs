@@ -248,24 +248,27 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
     // joined, over both radii. Measured (0.75 m, 2 m; the default converged over 64 frames under
-    // its checkerboard, its rays' last step at R): the walker 1.06×, 0.75× alone and 1.19×,
-    // 1.14× joined (its limbs are closed solids with air between them, which the thickness
-    // counts as solid); the box and the wall outside the view 1.00× (the rays that would find
-    // them leave the screen); DamagedHelmet 0.84×, 0.79× and 0.96×, 0.97×; CesiumMan 0.88×,
-    // 0.78× and 0.91×, 1.00×; the Cornell box, walls of one polygon, 0.70×, 0.74× and 0.73×,
-    // 0.91×. Before the last step lay at R: the walker 1.05×, 0.77× and 1.19×, 1.13×;
-    // DamagedHelmet 0.85×, 0.80× and 0.94×, 0.93×; CesiumMan 0.83×, 0.81× and 0.92×, 1.00×; the
-    // Cornell box 0.70×, 0.72× and 0.72×, 0.91×. The walker read 0.98×, 0.81× and
+    // its checkerboard, a ray through a sheet towards the camera blocked): the walker 1.07×,
+    // 0.76× alone and 1.19×, 1.14× joined (its limbs are closed solids with air between them,
+    // which the thickness counts as solid); the box and the wall outside the view 1.00× (the
+    // rays that would find them leave the screen); DamagedHelmet 0.85×, 0.80× and 0.97×, 0.97×;
+    // CesiumMan 0.89×, 0.78× and 0.91×, 1.00×; the Cornell box, walls of one polygon, 0.70×,
+    // 0.74× and 0.73×, 0.92×. Before rays through a sheet counted: the walker 1.06×, 0.75× and
+    // 1.19×, 1.14×; DamagedHelmet 0.84×, 0.79× and 0.96×, 0.97×; CesiumMan 0.88×, 0.78× and
+    // 0.91×, 1.00×; the Cornell box 0.70×, 0.74× and 0.73×, 0.91×. Before the last step lay at R:
+    // the walker 1.05×, 0.77× and 1.19×, 1.13×; DamagedHelmet 0.85×, 0.80× and 0.94×, 0.93×;
+    // CesiumMan 0.83×, 0.81× and 0.92×, 1.00×; the Cornell box 0.70×, 0.72× and 0.72×, 0.91×.
+    // The walker read 0.98×, 0.81× and
     // 1.09×, 1.11× while the temporal clamp pulled a plane's edge toward the plane's inside (a
     // blur that softened the thickness's excess between the limbs; `temporal.wgsl`,
     // `mean_bounds`), and 1.11×, 0.81× and 1.18×, 1.16× before the checkerboard.
     let bounds = [
-        ("walker on floor", 1.07, 1.2),
+        ("walker on floor", 1.08, 1.21),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
         ("DamagedHelmet on floor", 0.93, 0.98),
         ("CesiumMan on floor", 0.9, 1.01),
-        ("CornellBox on floor", 0.75, 0.92),
+        ("CornellBox on floor", 0.75, 0.93),
     ];
     let shared = crate::models::shared_assets();
     let mut scenes: Vec<(FarScene, Option<&str>)> = far_scenes::procedural()
