@@ -106,9 +106,7 @@ fn came_through_from_behind(
     let f = along_sight(point, -linear_depth(view, front), orthographic);
     let b = along_sight(point, -linear_depth(view, back), orthographic);
     let world_normal = decode_normal(textureLoad(front_normal, q, 0).xyz);
-    let m = (view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz;
-    let to_eye = select(-f, vec3<f32>(0.0, 0.0, 1.0), orthographic);
-    let up = select(m, -m, dot(m, to_eye) < 0.0);
+    let up = facing_the_eye((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz, f);
     let before = dot(previous - b, up);
     let after = dot(point - b, up);
     if !(dot(f - b, up) < step && before < 0.0 && dot(point - f, up) > 0.0) {
@@ -131,6 +129,13 @@ fn came_through_from_behind(
     let back_z = front_z - (f.z - b.z);
     let tolerance = SHEET_TOLERANCE * step;
     return crossing_z <= front_z + tolerance && crossing_z >= back_z - tolerance;
+}
+
+// The view-space normal `m` of the surface at view-space `p`, turned to the side the camera sees.
+fn facing_the_eye(m: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    let orthographic = view.clip_from_view[3][3] == 1.0;
+    let to_eye = select(-p, vec3<f32>(0.0, 0.0, 1.0), orthographic);
+    return select(m, -m, dot(m, to_eye) < 0.0);
 }
 
 // The point at view-space depth `z` on the line of sight through view-space `p`.
@@ -170,11 +175,8 @@ fn beyond_the_edge(
         return false;
     }
     let e = view_position(edge, size, depth);
-    let m = (view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz;
     // The side of the plane the camera is on is the open one.
-    let orthographic = view.clip_from_view[3][3] == 1.0;
-    let to_eye = select(-e, vec3<f32>(0.0, 0.0, 1.0), orthographic);
-    let up = select(m, -m, dot(m, to_eye) < 0.0);
+    let up = facing_the_eye((view.view_from_world * vec4<f32>(world_normal, 0.0)).xyz, e);
     let start = dot(origin + dir * on_screen - e, up);
     let end = dot(origin + dir * radius - e, up);
     if !(start > 0.0 && end < 0.0) {

@@ -108,9 +108,11 @@ fn came_through_from_behind(
         (x.truncate() * scale).extend(z)
     };
     let (f, b) = (along_sight(front.depth), along_sight(back.depth));
-    let m = (view.view_from_world * front.normal.extend(0.0)).xyz();
-    let to_eye = if orthographic { Vec3::Z } else { -f };
-    let up = if m.dot(to_eye) < 0.0 { -m } else { m };
+    let up = facing_the_eye(
+        view,
+        (view.view_from_world * front.normal.extend(0.0)).xyz(),
+        f,
+    );
     let before = (previous - b).dot(up);
     let after = (x - b).dot(up);
     if !((f - b).dot(up) < step && before < 0.0 && (x - f).dot(up) > 0.0) {
@@ -128,6 +130,17 @@ fn came_through_from_behind(
     let back_z = front_z - (f.z - b.z);
     let tolerance = SHEET_TOLERANCE * step;
     crossing.z <= front_z + tolerance && crossing.z >= back_z - tolerance
+}
+
+/// The view-space normal `m` of the surface at view-space `p`, turned to the side the camera
+/// sees: `facing_the_eye` in `march.wgsl`.
+fn facing_the_eye(view: &ViewMatrices, m: Vec3, p: Vec3) -> Vec3 {
+    let to_eye = if view.clip_from_view.w_axis.w == 1.0 {
+        Vec3::Z
+    } else {
+        -p
+    };
+    if m.dot(to_eye) < 0.0 { -m } else { m }
 }
 
 /// Occlusion (0 = open) of every pixel, row-major.
@@ -172,12 +185,7 @@ fn beyond_the_edge(
     let m = (view.view_from_world * texel.normal.extend(0.0))
         .xyz()
         .normalize();
-    let to_eye = if view.clip_from_view.w_axis.w == 1.0 {
-        Vec3::Z
-    } else {
-        -e
-    };
-    let up = if m.dot(to_eye) < 0.0 { -m } else { m };
+    let up = facing_the_eye(view, m, e);
     let start = (origin + dir * on_screen - e).dot(up);
     let end = (origin + dir * radius - e).dot(up);
     if !(start > 0.0 && end < 0.0) {
