@@ -218,8 +218,10 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// characters standing on a floor, every mesh an occluder: never worse than the default alone at
 /// 0.75 m, but for the walker's voxels (at most 5% worse), and at 2 m, where most of what occludes
 /// a character lies beyond the near field's reach, at least a tenth better, but for the voxels
-/// (at least 7%: the walker 0.0251 against the default's 0.0275, 0.91×, CesiumMan 0.0237 against
-/// 0.0262, 0.90×, since the default's rays' last step lies at R; under 0.9× before). Measured, the default
+/// (at least 5%: the walker 0.0251 against the default's 0.0268, 0.94×, since a ray through a
+/// sheet towards the camera counts as blocked, which brought the default alone closer; 0.0251
+/// against 0.0275, 0.91×, and CesiumMan 0.0237 against 0.0262, 0.90×, since the default's rays'
+/// last step lies at R; under 0.9× before). Measured, the default
 /// converged over 64 frames: at 0.75 m the walker's error falls by 4% with spheres and 2% with
 /// fields and holds with voxels (0.0245 against 0.0245; it rose by 4% while the temporal clamp
 /// pulled a plane's edge toward the plane's inside, by 2% when this test took 60 frames),
@@ -260,7 +262,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
         );
         check_joined(&mut run, &bvh, scene.name, "default", 2.0, |term, alone| {
             if term == FarTerm::Voxels {
-                0.93 * alone
+                0.95 * alone
             } else {
                 0.9 * alone
             }
