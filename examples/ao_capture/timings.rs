@@ -79,8 +79,8 @@ pub fn summary(store: &DiagnosticsStore, bevy_ssao: bool) -> String {
 /// span's start made it run its queue first: BENCHMARKS.md, "Spans that hold their work"). A
 /// time alone would name every pass on a hardware GPU, where each takes well under a millisecond
 /// yet none under 1% of the frame (an NVIDIA H200's smallest AO pass read 3.8% at 640×480); a
-/// share alone would name lavapipe's back faces of a few triangles, which take 0.2–0.7 ms of a
-/// 70 ms frame.
+/// share alone would name lavapipe's back faces of a few triangles, which take about 0.5 ms of
+/// a 70 ms frame.
 const EMPTY_SPAN_MS: f64 = 0.2;
 const EMPTY_SPAN_SHARE: f64 = 0.01;
 
