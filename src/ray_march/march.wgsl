@@ -13,9 +13,10 @@
 
 // Whether the point at view-space depth `z` and clip-space position `clip` lies inside the
 // geometry the two layers bound, less than `settings.ray_march_thickness` metres behind the
-// back-face layer, or behind a sheet thinner than a step (`step`, metres) that the previous step,
-// at depth `previous_z`, lay in front of: 1 blocked, 0 free behind the front layer, 2 free in
-// front of it (or where it holds nothing), −1 off the screen.
+// back-face layer (less than `radius` behind a two-sided sheet), or behind a sheet thinner than
+// a step (`step`, metres) that the previous step, at depth `previous_z`, lay in front of:
+// 1 blocked, 0 free behind the front layer, 2 free in front of it (or where it holds nothing),
+// −1 off the screen.
 fn blocked(
     z: f32,
     previous_z: f32,
@@ -54,11 +55,14 @@ fn blocked(
         // model (a shell's inner surface lies millimetres behind its outer one), so a step just
         // behind it counts as blocked (`RayMarchParams::thickness` says why).
         let back_z = -linear_depth(view, back);
-        if back_z - z < settings.ray_march_thickness {
+        // Where the back face lies where the front one does (`TWO_SIDED_GAP`), the layer tells
+        // nothing of what lies behind: the step is judged as where no back face was drawn.
+        let two_sided = abs(front_z - back_z) < TWO_SIDED_GAP * -front_z;
+        if back_z - z < select(settings.ray_march_thickness, radius, two_sided) {
             return 1;
         }
-        // A wall of one polygon has its back face where its front is: no step lands between
-        // them, so a ray through it shows only as a step in front and the next one behind.
+        // A sheet thinner than a step (a heat sink's fin): no step may land inside it, so a ray
+        // through it shows only as a step in front and the next one behind.
         let crossed = front_z - back_z < step && previous_z >= front_z;
         return select(0, 1, crossed);
     }
@@ -69,6 +73,19 @@ fn blocked(
 // layers hold where it crosses (`came_through_from_behind`), as a share of a step: the sheet is
 // a plane only near the pixel that showed it.
 const SHEET_TOLERANCE: f32 = 0.05;
+
+// How far apart, as a share of their distance from the camera, the two layers may lie and still
+// hold the same polygon: a two-sided sheet (a wall of one polygon with a double-sided material)
+// is drawn into both at one depth, equal to a few ulps. Behind such a sheet the back layer tells
+// nothing; counted as air beyond `RayMarchParams::thickness`, the CornellBox's ceiling, seen from
+// above, hid its upper walls, and every ray from inside the room through them read as open (RMSE
+// at 160×120, R = 0.73 m: 0.0684, 0.0475 with this; BENCHMARKS.md, "Behind a two-sided sheet").
+// Either side of the front layer, not only behind it: the coarse copies' back faces
+// (`DynamicAo::coarse_back_faces`) can lie in front of a model's surface, and a test of one side
+// took them for sheets there and blocked rays up to R behind DamagedHelmet (0.0339 → 0.0350 at
+// R = 2 m). Thin solids lie further apart: at 0.02 R the heat sink's 8 mm fins counted as
+// sheets, and their error rose from 0.0676 to 0.0832.
+const TWO_SIDED_GAP: f32 = 1e-4;
 
 // Whether a ray now at view-space `point` (clip-space `point_clip`), in front of the surface the
 // front layer shows there, came through that surface from behind since its previous step, at

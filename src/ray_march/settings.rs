@@ -32,7 +32,10 @@ pub struct RayMarchParams {
     /// (BENCHMARKS.md, "Thickness behind the back layer"). 0 counts everything behind the
     /// back-face layer as air. On the project's skinned walker, whose limbs are closed solids
     /// with air between them, it raised the error by 2% alone and by up to 10% joined to the
-    /// far field at 0.75 m. No unit. Valid: 0..=1. Default: [`DEFAULT_RAY_MARCH_THICKNESS`].
+    /// far field at 0.75 m. Behind a two-sided sheet (a polygon with a double-sided material,
+    /// whose back face the layer holds at its front's depth) the layer tells nothing, and a step
+    /// counts as blocked up to R behind it, whatever this value, as where no back face was drawn.
+    /// No unit. Valid: 0..=1. Default: [`DEFAULT_RAY_MARCH_THICKNESS`].
     pub thickness: f32,
     /// Under temporal accumulation, march one texel of two each frame, in a checkerboard that
     /// alternates, so each texel is marched every other frame. The march costs about half as

@@ -38,10 +38,15 @@ fn project(view: &ViewMatrices, x: Vec3, width: u32, height: u32) -> Option<(IVe
     Some((q, ndc.z))
 }
 
+/// How far apart, as a share of their distance from the camera, the two layers may lie and
+/// still hold the same polygon, a two-sided sheet: `TWO_SIDED_GAP` in `march.wgsl`, which says
+/// why.
+const TWO_SIDED_GAP: f32 = 1e-4;
+
 /// 1 blocked (inside the solid the layers bound, less than `thickness` behind the back-face
-/// layer, or behind a sheet thinner than `step` that the previous step, at `previous`, lay in
-/// front of), 0 free behind the front layer, 2 free in front of it (or where it holds nothing),
-/// −1 left the screen.
+/// layer or R behind a two-sided sheet, or behind a sheet thinner than `step` that the previous
+/// step, at `previous`, lay in front of), 0 free behind the front layer, 2 free in front of it
+/// (or where it holds nothing), −1 left the screen.
 fn blocked(
     nd: &NdBuffer,
     view: &ViewMatrices,
@@ -67,7 +72,13 @@ fn blocked(
             return 1;
         }
         let back_z = view.view_position(q.x, q.y, w, h, back.depth).z;
-        if back_z - x.z < inputs.thickness {
+        let two_sided = (front_z - back_z).abs() < TWO_SIDED_GAP * -front_z;
+        let thickness = if two_sided {
+            inputs.radius
+        } else {
+            inputs.thickness
+        };
+        if back_z - x.z < thickness {
             return 1;
         }
         let crossed = front_z - back_z < step && previous.z >= front_z;

@@ -43,6 +43,8 @@ pub struct SceneSpec {
     pub occluders: Vec<(usize, SphereOccluder)>,
     /// Meshes (by index into `meshes`) that carry an AO field.
     pub fields: Vec<(usize, AoField)>,
+    /// Whether the meshes' material is double-sided (no face culled), as glTF models' often are.
+    pub two_sided: bool,
 }
 
 impl SceneSpec {
@@ -54,6 +56,15 @@ impl SceneSpec {
             sun: None,
             occluders: Vec::new(),
             fields: Vec::new(),
+            two_sided: false,
+        }
+    }
+
+    /// The same scene with a double-sided material on every mesh.
+    pub fn two_sided(self) -> Self {
+        Self {
+            two_sided: true,
+            ..self
         }
     }
 
@@ -220,6 +231,8 @@ impl Gpu {
                 base_color: Color::srgb(0.8, 0.8, 0.8),
                 perceptual_roughness: 1.0,
                 reflectance: 0.0,
+                double_sided: scene.two_sided,
+                cull_mode: (!scene.two_sided).then_some(bevy::render::render_resource::Face::Back),
                 ..default()
             });
         for (i, (mesh, transform)) in scene.meshes.iter().enumerate() {

@@ -12,7 +12,7 @@ use bevy_dynamic_ao::settings::DEFAULT_RAY_MARCH_THICKNESS;
 
 use crate::far_scenes::{self, FarRun, FarScene};
 use crate::far_terms::FarTerm;
-use crate::harness::{Frame, Gpu, converged_frames, difference_stats, plain_ao};
+use crate::harness::{Frame, Gpu, SceneSpec, converged_frames, difference_stats, plain_ao};
 use crate::scenes;
 
 /// The CPU twin's visibility for `frame`, rendered with `rays` at `radius`, against the GPU's: mean
@@ -248,7 +248,13 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
     // joined, over both radii. Measured (0.75 m, 2 m; the default converged over 64 frames under
-    // its checkerboard, a ray through a sheet towards the camera blocked): the walker 1.07×,
+    // its checkerboard, a step behind a two-sided sheet judged as where no back face was drawn):
+    // the walker 1.07×, 0.76× alone and 1.19×, 1.14× joined; DamagedHelmet 0.86×, 0.81× and
+    // 0.97×, 0.98×; CesiumMan 0.89×, 0.78× and 0.91×, 1.00×; the Cornell box 0.91×, 0.99× and
+    // 0.91×, 0.96×: the thickness had stood in for its ceiling, which now counts without it
+    // (the default alone 0.0574 and 0.1098, from 0.0847 and 0.1771; DamagedHelmet 0.0424 and
+    // 0.0535, from 0.0423 and 0.0532). Before that, with a ray through a sheet towards the
+    // camera blocked: the walker 1.07×,
     // 0.76× alone and 1.19×, 1.14× joined (its limbs are closed solids with air between them,
     // which the thickness counts as solid); the box and the wall outside the view 1.00× (the
     // rays that would find them leave the screen); DamagedHelmet 0.85×, 0.80× and 0.97×, 0.97×;
@@ -266,9 +272,9 @@ fn the_thickness_holds_with_every_mesh_an_occluder() {
         ("walker on floor", 1.08, 1.21),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
-        ("DamagedHelmet on floor", 0.93, 0.98),
+        ("DamagedHelmet on floor", 0.88, 0.99),
         ("CesiumMan on floor", 0.9, 1.01),
-        ("CornellBox on floor", 0.75, 0.93),
+        ("CornellBox on floor", 1.0, 0.97),
     ];
     let shared = crate::models::shared_assets();
     let mut scenes: Vec<(FarScene, Option<&str>)> = far_scenes::procedural()
@@ -327,6 +333,44 @@ fn the_thickness_holds_with_every_mesh_an_occluder() {
     assert!(failed.is_empty(), "{failed:?}");
 }
 
+/// `scene` under the ray march of [`RayMarchParams::REFERENCE`] at `radius`, unblurred: the
+/// running app, its frame, the CPU ray tracer's truth, and the GPU against its CPU twin
+/// ([`against_cpu`]).
+fn reference_frame(scene: &SceneSpec, radius: f32) -> (Gpu, Frame, Vec<f32>, (f32, f32)) {
+    let many_rays = plain_ao()
+        .with_technique(AoTechnique::RayMarch)
+        .with_radius(radius)
+        .with_blur(AoBlur::OFF)
+        .with_ray_march(RayMarchParams::REFERENCE);
+    let mut gpu = Gpu::new(scene, many_rays.clone());
+    let frame = gpu.frame(4);
+    let truth = frame.ground_truth(&scene.bvh(), radius);
+    let stats = against_cpu(&frame, many_rays.ray_march, radius);
+    (gpu, frame, truth, stats)
+}
+
+/// The pixels of `frame` whose front layer shows a surface with a normal `facing` (world space)
+/// within `cos` of it: how many, and a function giving the mean occlusion of an image over them.
+fn facing_pixels(frame: &Frame, facing: Vec3, cos: f32) -> (usize, impl Fn(&[f32]) -> f32) {
+    let on: Vec<bool> = frame
+        .nd
+        .front
+        .iter()
+        .map(|t| t.depth > 0.0 && t.normal.dot(facing) > cos)
+        .collect();
+    let count = on.iter().filter(|o| **o).count();
+    let occlusion_of = move |visibility: &[f32]| {
+        let values: Vec<f32> = visibility
+            .iter()
+            .zip(&on)
+            .filter(|(_, o)| **o)
+            .map(|(v, _)| 1.0 - v)
+            .collect();
+        values.iter().sum::<f32>() / values.len() as f32
+    };
+    (count, occlusion_of)
+}
+
 /// A ray that leaves the screen meets, past the edge, the surface the edge pixel shows continued
 /// as its tangent plane (`beyond_the_edge` in `march.wgsl`). A plate standing near the right edge
 /// of the view sees most of the floor it stands on past that edge: counted as open, those rays
@@ -335,35 +379,11 @@ fn the_thickness_holds_with_every_mesh_an_occluder() {
 #[test]
 fn a_surface_running_off_the_view_occludes_past_the_edge() {
     let radius = 0.75;
-    let scene = scenes::plate_by_the_edge();
-    let many_rays = plain_ao()
-        .with_technique(AoTechnique::RayMarch)
-        .with_radius(radius)
-        .with_blur(AoBlur::OFF)
-        .with_ray_march(RayMarchParams::REFERENCE);
-    let mut gpu = Gpu::new(&scene, many_rays.clone());
-    let frame = gpu.frame(4);
-    let truth = frame.ground_truth(&scene.bvh(), radius);
-    let (mean, p99) = against_cpu(&frame, many_rays.ray_march, radius);
+    let (_, frame, truth, (mean, p99)) = reference_frame(&scenes::plate_by_the_edge(), radius);
 
     // The plate's face: the pixels whose normal is +x.
-    let face: Vec<bool> = frame
-        .nd
-        .front
-        .iter()
-        .map(|t| t.depth > 0.0 && t.normal.x > 0.9)
-        .collect();
-    let occlusion_of = |visibility: &[f32]| {
-        let values: Vec<f32> = visibility
-            .iter()
-            .zip(&face)
-            .filter(|(_, on)| **on)
-            .map(|(v, _)| 1.0 - v)
-            .collect();
-        values.iter().sum::<f32>() / values.len() as f32
-    };
+    let (pixels, occlusion_of) = facing_pixels(&frame, Vec3::X, 0.9);
     let (ours, traced) = (occlusion_of(&frame.visibility), occlusion_of(&truth));
-    let pixels = face.iter().filter(|on| **on).count();
     println!(
         "plate by the edge: GPU − CPU mean {mean:.5}, 99th percentile {p99:.3}; the face's \
          {pixels} pixels occluded {ours:.3} on average, the truth {traced:.3}"
@@ -374,5 +394,44 @@ fn a_surface_running_off_the_view_occludes_past_the_edge() {
     assert!(
         (ours - traced).abs() < 0.035,
         "the plate's face: {ours} occluded, the truth {traced}"
+    );
+}
+
+/// A room of one-polygon walls with a double-sided material, seen from above its ceiling, as the
+/// CornellBox is built (`scenes::sheet_room`): both ND-buffer layers hold the ceiling at one
+/// depth, and it hides the upper walls. Behind such a sheet the back layer tells nothing, and a
+/// step there counts as where no back face was drawn (`TWO_SIDED_GAP` in `march.wgsl`): counted
+/// as air beyond the thickness, rays from inside the room through the hidden walls read as open
+/// and the back wall came out lighter than the truth. The GPU matches its CPU twin ray for ray.
+/// Measured: 8 × 4 rays RMSE 0.0501, the default converged 0.0524, the back wall occluded 0.718
+/// against the truth's 0.698; with the sheet counted as air behind the thickness, 0.0714, 0.0753
+/// and 0.584.
+#[test]
+fn behind_a_two_sided_sheet_the_back_layer_tells_nothing() {
+    let radius = 0.75;
+    let (mut gpu, frame, truth, (mean, p99)) = reference_frame(&scenes::sheet_room(), radius);
+    let mask = frame.geometry_mask();
+    let reference = rmse(&frame.visibility, &truth, Some(&mask));
+    let ao = DynamicAo::default().with_radius(radius);
+    gpu.set_ao(|a| *a = ao.clone());
+    let default = gpu.frame(converged_frames(&ao));
+    let converged = rmse(&default.visibility, &truth, Some(&mask));
+
+    // The back wall: the pixels whose normal faces the camera squarely.
+    let (pixels, occlusion_of) = facing_pixels(&frame, Vec3::Z, 0.99);
+    let (ours, traced) = (occlusion_of(&default.visibility), occlusion_of(&truth));
+    println!(
+        "sheet room: 8 × 4 rays RMSE {reference:.4} (GPU − CPU mean {mean:.5}, 99th percentile \
+         {p99:.3}), the default converged {converged:.4}; the back wall's {pixels} pixels \
+         occluded {ours:.3} on average, the truth {traced:.3}"
+    );
+    assert!(pixels > 300, "the back wall shows in {pixels} pixels");
+    assert!(mean < 0.01, "mean |GPU − CPU| = {mean}");
+    assert!(p99 <= 0.5 + 1e-3, "99th percentile |GPU − CPU| = {p99}");
+    assert!(reference < 0.054, "8 × 4 rays: RMSE {reference}");
+    assert!(converged < 0.056, "the default's RMSE {converged}");
+    assert!(
+        (ours - traced).abs() < 0.03,
+        "the back wall: {ours} occluded, the truth {traced}"
     );
 }

@@ -128,6 +128,29 @@ pub fn open_room() -> SceneSpec {
         )
 }
 
+/// A room open at the front built as the CornellBox is: a 1 m ceiling and three walls, each one
+/// polygon with a double-sided material, a tall and a short box inside, on a floor, and the
+/// camera above the ceiling's height looking in. The ceiling hides the upper walls from the
+/// camera, and both ND-buffer layers hold it at one depth.
+pub fn sheet_room() -> SceneSpec {
+    let wall = |normal: Dir3| Plane3d::new(*normal, Vec2::splat(0.5)).mesh().build();
+    SceneSpec::new(Transform::from_xyz(0.0, 1.5, 3.6).looking_at(Vec3::new(0.0, 0.5, 0.0), Vec3::Y))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(wall(Dir3::X), Transform::from_xyz(-0.5, 0.5, 0.0))
+        .with(wall(Dir3::NEG_X), Transform::from_xyz(0.5, 0.5, 0.0))
+        .with(wall(Dir3::Z), Transform::from_xyz(0.0, 0.5, -0.5))
+        .with(wall(Dir3::NEG_Y), Transform::from_xyz(0.0, 1.0, 0.0))
+        .with(
+            Cuboid::new(0.3, 0.6, 0.3),
+            Transform::from_xyz(-0.17, 0.3, -0.15).with_rotation(Quat::from_rotation_y(0.3)),
+        )
+        .with(
+            Cuboid::new(0.3, 0.3, 0.3),
+            Transform::from_xyz(0.17, 0.15, 0.15).with_rotation(Quat::from_rotation_y(-0.3)),
+        )
+        .two_sided()
+}
+
 /// `mesh` seen from inside: its triangles wound the other way and its normals reversed, the inner
 /// surface of a shell.
 fn inside_out(mesh: impl Into<Mesh>) -> Mesh {
