@@ -36,7 +36,7 @@ use bevy::render::{
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
-use crate::view::PendingPasses;
+use crate::view::{PendingPasses, drop_without_ao};
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
 pub struct ComposePlugin;
@@ -82,6 +82,11 @@ impl Plugin for ComposePlugin {
                     (
                         pipeline::prepare_compose_bind_groups,
                         debug_view::prepare_debug_view_bind_groups,
+                        drop_without_ao::<(
+                            pipeline::ComposeBindGroup,
+                            debug_view::DebugViewPipelineId,
+                            debug_view::DebugViewBindGroup,
+                        )>,
                     )
                         .in_set(DynamicAoPrepare::BindGroups),
                 ),

@@ -102,7 +102,7 @@ use crate::capabilities;
 use crate::schedule::{
     self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
 };
-use crate::view::{FarTerm, prepare_far_visibility};
+use crate::view::{FarTerm, drop_without_ao, prepare_far_visibility};
 
 /// AO fields: the asset and its loader, baking on load, and the box pass.
 pub struct AoFieldPlugin;
@@ -146,6 +146,8 @@ impl Plugin for AoFieldPlugin {
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_fields.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_field_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<pipeline::FieldBindGroup>
+                        .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(Core3d, node::field_pass.in_set(DynamicAoSystems::FarField));

@@ -61,7 +61,7 @@ use bevy::render::{GpuResourceAppExt, Render, render_resource::PipelineCache};
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
-use crate::view::{DynamicAoView, PendingPasses};
+use crate::view::{DynamicAoView, FilterWritesVisibility, PendingPasses, drop_without_ao};
 
 pub(crate) use bind_groups::{BlurBindGroups, FilterInputs};
 pub(crate) use pipeline::BlurPipelines;
@@ -85,6 +85,13 @@ impl Plugin for FilterPlugin {
                 Render,
                 (
                     bind_groups::prepare_blur_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<(
+                        BlurBindGroups,
+                        bind_groups::UpsampleBindGroup,
+                        bind_groups::VisibilityBindGroup,
+                        FilterWritesVisibility,
+                    )>
+                        .in_set(DynamicAoPrepare::BindGroups),
                     wait_for_filter.in_set(DynamicAoPrepare::Readiness),
                 ),
             )

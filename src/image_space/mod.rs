@@ -15,7 +15,7 @@ mod pipeline;
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
 use crate::settings::AoTechnique;
-use crate::view::{DynamicAoView, PendingPasses};
+use crate::view::{DynamicAoView, PendingPasses, drop_without_ao};
 
 /// Registers the shared pipelines, bind groups and pass of the image-space techniques.
 pub(crate) struct ImageSpacePlugin;
@@ -33,6 +33,8 @@ impl Plugin for ImageSpacePlugin {
                 Render,
                 (
                     pipeline::prepare_image_space_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<pipeline::ImageSpaceBindGroup>
+                        .in_set(DynamicAoPrepare::BindGroups),
                     wait_for_image_space.in_set(DynamicAoPrepare::Readiness),
                 ),
             )

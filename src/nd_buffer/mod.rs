@@ -34,6 +34,7 @@ use bevy::render::{
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoStartup, DynamicAoSystems};
+use crate::view::drop_without_ao;
 pub use coarse::COARSE_BACK_FACES_ABOVE;
 pub(crate) use front_layer::{FrontLayer, FrontLayerViews};
 pub use phase::{BackFace3d, CentreSample3d, NdLayer3d};
@@ -94,6 +95,11 @@ impl Plugin for NdBufferPlugin {
                     coarse::prepare_coarse_back_faces.in_set(RenderSystems::PrepareBindGroups),
                     front_layer::wait_for_front_layer_copy.in_set(DynamicAoPrepare::Readiness),
                     front_layer::prepare_front_layer_copy_bind_groups
+                        .in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<(
+                        front_layer::FrontLayerCopy,
+                        front_layer::FrontLayerCopyBindGroup,
+                    )>
                         .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )

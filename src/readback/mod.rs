@@ -23,6 +23,7 @@ use bevy::render::{
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoPrepare, DynamicAoSystems};
+use crate::view::drop_without_ao;
 
 /// Asks the plugin to copy this camera's AO buffer and both ND-buffer layers every frame.
 ///
@@ -84,7 +85,11 @@ impl Plugin for ReadbackPlugin {
             .init_gpu_resource::<pipeline::ReadbackPipeline>()
             .add_systems(
                 Render,
-                pipeline::prepare_readback_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                (
+                    pipeline::prepare_readback_bind_groups,
+                    drop_without_ao::<pipeline::ReadbackBindGroup>,
+                )
+                    .in_set(DynamicAoPrepare::BindGroups),
             )
             .add_systems(Core3d, node::readback_pass.in_set(DynamicAoSystems::Debug));
     }

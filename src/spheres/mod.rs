@@ -80,7 +80,7 @@ use crate::capabilities;
 use crate::schedule::{
     self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
 };
-use crate::view::{FarTerm, prepare_far_visibility};
+use crate::view::{FarTerm, drop_without_ao, prepare_far_visibility};
 
 /// Sphere occluders: clustering, per-frame refit, and the splat pass.
 pub struct SphereOccluderPlugin;
@@ -139,6 +139,8 @@ impl Plugin for SphereOccluderPlugin {
                         .in_set(RenderSystems::PrepareResources),
                     view::wait_for_splat.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_splat_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<pipeline::SplatBindGroup>
+                        .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(Core3d, node::splat_pass.in_set(DynamicAoSystems::FarField));

@@ -72,6 +72,7 @@ use bevy::render::{ExtractSchedule, GpuResourceAppExt, MainWorld, Render, Render
 use crate::capabilities;
 use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
 use crate::settings::DynamicAo;
+use crate::view::drop_without_ao;
 pub use settings::AoTemporal;
 
 /// Accumulates the image-space occlusion of cameras whose [`AoTemporal`] is on.
@@ -98,6 +99,8 @@ impl Plugin for TemporalPlugin {
                     sequence::advance_sequences.in_set(RenderSystems::PrepareViews),
                     node::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_temporal_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<pipeline::TemporalBindGroup>
+                        .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )
             .add_systems(

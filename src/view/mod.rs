@@ -170,6 +170,21 @@ impl DynamicAoView {
 #[derive(Component)]
 pub(crate) struct FilterWritesVisibility;
 
+/// Takes a technique's per-view render state `B` (its bind groups, textures, histories) off the
+/// views of cameras that no longer run the plugin: their `DynamicAo` was taken away, or they
+/// stopped rendering. Extraction drops such a view's [`DynamicAoView`], but the components the
+/// techniques inserted stay on the render entity from frame to frame; a pass that still found
+/// them would go on running with the last frame's bind groups, after the textures behind them
+/// went back to Bevy's texture cache. Each technique registers it for what it inserts.
+pub(crate) fn drop_without_ao<B: Bundle>(
+    mut commands: Commands,
+    views: Query<Entity, (With<ExtractedCamera>, Without<DynamicAoView>)>,
+) {
+    for entity in &views {
+        commands.entity(entity).remove::<B>();
+    }
+}
+
 /// The far-field output of each term on a view, for compose: the technique that owns the term
 /// makes and writes it while the term takes part. Renewed empty at every extraction.
 #[derive(Component, Default)]

@@ -5,7 +5,10 @@ use bevy::camera::{Camera, Camera3d, visibility::RenderLayers};
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
-use bevy::render::{Extract, render_resource::ShaderType, sync_world::RenderEntity, view::Msaa};
+use bevy::render::{
+    Extract, extract_component::DynamicUniformIndex, render_resource::ShaderType,
+    sync_world::RenderEntity, view::Msaa,
+};
 
 use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
 
@@ -95,10 +98,12 @@ pub(crate) struct DynamicAoUniform {
 }
 
 /// The render-world components a view has while it runs the plugin; each technique drops its
-/// own state on views without [`DynamicAoView`].
+/// own state on views without [`DynamicAoView`] (`view::drop_without_ao`). Bevy inserts the
+/// uniform's index each frame a view has the uniform, and never takes it away.
 type ViewState = (
     DynamicAoView,
     DynamicAoUniform,
+    DynamicUniformIndex<DynamicAoUniform>,
     FarFieldOutputs,
     PendingPasses,
     super::DynamicAoTextures,

@@ -99,6 +99,7 @@ use crate::capabilities;
 use crate::schedule::{
     self, DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems, DynamicAoUpdate,
 };
+use crate::view::drop_without_ao;
 
 /// Voxel volumes: per-frame gathering, voxelization, sampling and the occupied-voxel view.
 pub struct VoxelAoPlugin;
@@ -149,6 +150,12 @@ impl Plugin for VoxelAoPlugin {
                         .in_set(RenderSystems::PrepareResources),
                     node::wait_for_voxels.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_voxel_bind_groups.in_set(DynamicAoPrepare::BindGroups),
+                    drop_without_ao::<(
+                        view::VoxelTextures,
+                        pipeline::VoxelBindGroups,
+                        show::ShowVoxels,
+                    )>
+                        .in_set(DynamicAoPrepare::BindGroups),
                     show::prepare_show_voxels.in_set(DynamicAoPrepare::OverlayBindGroups),
                 ),
             )

@@ -271,27 +271,26 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 }
 
 /// A closed ring on a floor, every mesh a far-field occluder. Sphere proxies: the ring's box
-/// proxies stand one behind another as the floor sees them, and compose joins them by their
-/// union, as a character's. With their product (every proxy an independent occluder), the floor
-/// read too dark metres away: joined to the default at 2 m the error rose from 0.068 to 0.100 on a
-/// bumpy ring of 60,000 triangles (BENCHMARKS.md, "A bumpy ring on a floor"). AO fields: the
-/// ring's own surface is left to the image-space technique, which under count-once reaches only
-/// 0.5 m; its far side across the hole, beyond that, comes from the field's own-surface share.
-/// Without it the field lowered the error little or raised it: here 0.88×, 0.70×, 0.94× and
-/// 1.10× (in the order below), on the bumpy ring 1.06× joined to the near field at 0.75 m.
-/// Joined to the near field each term must lower the error at both radii, joined to the default
-/// at 0.75 m; at 2 m the default alone does better than either joined. Measured here, joined
-/// against alone, near field at 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.96×,
-/// 1.53×; fields 0.70×, 0.55×, 0.80×, 0.97× (the default's 0.74×, 1.43×, 0.67× and 1.02× before
-/// its rays' last step lay at R: that lowered the default alone at 0.75 m to 0.0293, more than
-/// the joined images, whose march stops at `near_field_radius`). The default alone at 2 m reads
-/// 0.0210 since the ray
-/// march continues the surface at the screen's edge past it (0.0416 before, when proxies took it
-/// to 0.73× and the field to 0.55×; 0.0238 while the temporal clamp pulled a plane's edge toward
-/// the plane's inside, when the spheres read 1.26× and the field 0.95×): joined, count-once
-/// confines the ray march to `near_field_radius` (0.5 m) and leaves the rest to the ring's
-/// proxies, which cast it less exactly than the continued floor does, so the spheres at 2 m
-/// raise the default's error (0.0301) and the field leaves it about where it was (0.0215).
+/// proxies stand one behind another as the floor sees them, and compose joins them by their union,
+/// as a character's. With their product (every proxy an independent occluder), the floor read too
+/// dark metres away: joined to the default at 2 m the error rose from 0.068 to 0.100 on a bumpy
+/// ring of 60,000 triangles (BENCHMARKS.md, "A bumpy ring on a floor"). AO fields: the ring's own
+/// surface is left to the image-space technique, which under count-once reaches only 0.5 m; its far
+/// side across the hole, beyond that, comes from the field's own-surface share. Without it the
+/// field lowered the error little or raised it: here 0.88×, 0.70×, 0.94× and 1.10× (in the order
+/// below), on the bumpy ring 1.06× joined to the near field at 0.75 m. Joined to the near field
+/// each term must lower the error at both radii, joined to the default at 0.75 m; at 2 m the
+/// default alone does better than either joined. Measured here, joined against alone, near field at
+/// 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.96×, 1.55× (1.57× on an NVIDIA H200);
+/// fields 0.70×, 0.55×, 0.80×, 0.97× (the default's 0.74×, 1.43×, 0.67× and 1.02× before its rays'
+/// last step lay at R: that lowered the default alone at 0.75 m to 0.0293, more than the joined
+/// images, whose march stops at `near_field_radius`). The default alone at 2 m reads 0.0208 since
+/// the ray march continues the surface at the screen's edge past it (0.0416 before, when proxies
+/// took it to 0.73× and the field to 0.55×; 0.0238 while the temporal clamp pulled a plane's edge
+/// toward the plane's inside, when the spheres read 1.26× and the field 0.95×): joined, count-once
+/// confines the ray march to `near_field_radius` (0.5 m) and leaves the rest to the ring's proxies,
+/// which cast it less exactly than the continued floor does, so the spheres at 2 m raise the
+/// default's error (0.0322) and the field leaves it about where it was (0.0203).
 #[test]
 fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
     let scene = far_scenes::ring_on_floor();
@@ -319,7 +318,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.98), (2.0, 1.56)],
+            [(0.75, 0.98), (2.0, 1.58)],
         ),
         (
             FarTerm::Fields,

@@ -173,6 +173,12 @@ impl Gpu {
         Self::build(scene, ao, None, false)
     }
 
+    /// Like [`Gpu::new`], with Bevy's render diagnostics: every pass's time span is reported in
+    /// the `DiagnosticsStore` (see [`pass_spans`]).
+    pub fn with_render_diagnostics(scene: &SceneSpec, ao: DynamicAo) -> Self {
+        Self::build_with_limits(scene, ao, None, true, None, true)
+    }
+
     /// Like [`Gpu::new`] on a device whose `max_storage_buffer_binding_size` is `bytes`, every
     /// other limit the adapter's.
     pub fn with_storage_binding_limit(scene: &SceneSpec, ao: DynamicAo, bytes: u64) -> Self {
@@ -184,11 +190,11 @@ impl Gpu {
             })
             .clone();
         limits.max_storage_buffer_binding_size = bytes;
-        Self::build_with_limits(scene, ao, None, true, Some(limits))
+        Self::build_with_limits(scene, ao, None, true, Some(limits), false)
     }
 
     fn build(scene: &SceneSpec, ao: DynamicAo, folder: Option<&str>, synchronous: bool) -> Self {
-        Self::build_with_limits(scene, ao, folder, synchronous, None)
+        Self::build_with_limits(scene, ao, folder, synchronous, None, false)
     }
 
     fn build_with_limits(
@@ -197,6 +203,7 @@ impl Gpu {
         folder: Option<&str>,
         synchronous: bool,
         limits: Option<WgpuLimits>,
+        diagnostics: bool,
     ) -> Self {
         let turn = GPU_TURN
             .lock()
@@ -222,6 +229,9 @@ impl Gpu {
             )),
             None => app.add_plugins((plugins, DynamicAoPlugin)),
         };
+        if diagnostics {
+            app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
+        }
         common::finish_plugins(&mut app);
 
         let world = app.world_mut();
@@ -464,6 +474,29 @@ impl Gpu {
             })
             .collect()
     }
+}
+
+/// How many measurements each of the plugin's pass time spans (`render/dynamic_ao_*`, CPU and
+/// GPU) holds in the app's `DiagnosticsStore`, by path; `forget` clears them first. Needs
+/// [`Gpu::with_render_diagnostics`].
+pub fn pass_spans(gpu: &mut Gpu, forget: bool) -> Vec<(String, usize)> {
+    let mut store = gpu
+        .app
+        .world_mut()
+        .resource_mut::<bevy::diagnostic::DiagnosticsStore>();
+    let mut spans = Vec::new();
+    for diagnostic in store.iter_mut() {
+        let path = diagnostic.path().as_str().to_owned();
+        if !path.starts_with("render/dynamic_ao") {
+            continue;
+        }
+        if forget {
+            diagnostic.clear_history();
+        }
+        spans.push((path, diagnostic.history_len()));
+    }
+    spans.sort();
+    spans
 }
 
 fn srgb_to_linear(v: u8) -> f32 {

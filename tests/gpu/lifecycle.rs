@@ -14,7 +14,7 @@ use bevy_dynamic_ao::geometry::triangles::TriangleScene;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
-use crate::harness::{Gpu, difference_stats, plain_ao};
+use crate::harness::{Gpu, difference_stats, pass_spans, plain_ao};
 use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
@@ -85,6 +85,54 @@ fn taking_dynamic_ao_away_turns_the_cameras_ao_off_and_giving_it_back_restores_i
     assert!(largest_difference(&removed, &no_ao) < 0.01);
     // Given back: the same image as before (the static noise pattern, no accumulation).
     assert!(largest_difference(&restored, &with_ao) < 0.01);
+}
+
+/// A camera that loses its `DynamicAo` keeps none of the plugin's passes. The render world keeps
+/// a camera's view from frame to frame, and with it whatever bind groups the passes left there;
+/// with accumulation off (the blur at its full radius) the blur went on running on them after the
+/// removal, into textures Bevy's texture cache had taken back, and on an NVIDIA H200 the GPU
+/// stopped answering a few frames later.
+#[test]
+fn no_pass_of_the_plugin_runs_on_a_camera_that_lost_it() {
+    let ao = DynamicAo {
+        temporal: AoTemporal::OFF,
+        ..plain_ao()
+    };
+    let mut gpu = Gpu::with_render_diagnostics(&scenes::cube_on_plane(), ao.clone());
+    gpu.set_ao(|a| a.technique = AoTechnique::Off);
+    let no_ao = gpu.color(4);
+    gpu.set_ao(|a| *a = ao.clone());
+    gpu.update(8);
+    pass_spans(&mut gpu, true);
+    gpu.update(8);
+    let running = pass_spans(&mut gpu, false);
+    println!("spans while running: {running:?}");
+    for pass in ["back_faces", "near_field", "blur"] {
+        assert!(
+            running
+                .iter()
+                .any(|(path, n)| path.contains(&format!("dynamic_ao_{pass}")) && *n > 0),
+            "the {pass} pass should report its time while the camera has DynamicAo"
+        );
+    }
+
+    let camera = gpu.camera;
+    gpu.app.world_mut().entity_mut(camera).remove::<DynamicAo>();
+    // Spans report a few frames after their frame.
+    gpu.update(8);
+    pass_spans(&mut gpu, true);
+    let removed = gpu.color(8);
+    let left: Vec<_> = pass_spans(&mut gpu, false)
+        .into_iter()
+        .filter(|(_, n)| *n > 0)
+        .collect();
+    assert!(
+        left.is_empty(),
+        "passes still run after the removal: {left:?}"
+    );
+    // The lit scene without AO, 8-bit rounding aside.
+    let difference = largest_difference(&removed, &no_ao);
+    assert!(difference < 0.01, "{difference}");
 }
 
 fn fields_only() -> DynamicAo {
