@@ -99,7 +99,7 @@ impl Plugin for TemporalPlugin {
                     sequence::advance_sequences.in_set(RenderSystems::PrepareViews),
                     node::wait_for_temporal.in_set(DynamicAoPrepare::Readiness),
                     pipeline::prepare_temporal_bind_groups.in_set(DynamicAoPrepare::BindGroups),
-                    drop_without_ao::<pipeline::TemporalBindGroup>
+                    drop_without_ao::<(TemporalHistory, pipeline::TemporalBindGroup)>
                         .in_set(DynamicAoPrepare::BindGroups),
                 ),
             )

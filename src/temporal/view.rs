@@ -164,8 +164,6 @@ pub(crate) fn prepare_history(
         Option<&mut TemporalHistory>,
         Option<&DynamicAoUniform>,
     )>,
-    // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
-    stale: Query<Entity, (With<TemporalHistory>, Without<DynamicAoView>)>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
     // What last frame left; this frame's new and dropped histories count from the next.
@@ -174,9 +172,6 @@ pub(crate) fn prepare_history(
         .filter_map(|(.., history, _)| history.map(TemporalHistory::bytes))
         .sum();
     memory.report("temporal", bytes);
-    for entity in &stale {
-        commands.entity(entity).remove::<TemporalHistory>();
-    }
     for (entity, view, textures, prepass, history, ao_uniform) in &mut views {
         let (true, Some(textures)) = (view.temporal, textures) else {
             if history.is_some() {

@@ -152,6 +152,7 @@ impl Plugin for VoxelAoPlugin {
                     pipeline::prepare_voxel_bind_groups.in_set(DynamicAoPrepare::BindGroups),
                     drop_without_ao::<(
                         view::VoxelTextures,
+                        view::VoxelHistory,
                         pipeline::VoxelBindGroups,
                         show::ShowVoxels,
                     )>

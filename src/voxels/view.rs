@@ -69,8 +69,6 @@ pub(crate) fn prepare_voxel_textures(
         Option<FrontLayer>,
         Option<&mut VoxelHistory>,
     )>,
-    // Views whose camera lost its `DynamicAo` (or stopped rendering) keep no history.
-    stale: Query<Entity, (With<VoxelHistory>, Without<DynamicAoView>)>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
     // What last frame left; this frame's new and dropped histories count from the next.
@@ -79,9 +77,6 @@ pub(crate) fn prepare_voxel_textures(
         .filter_map(|(.., history)| history.map(|h| h.0.bytes()))
         .sum();
     memory.report("voxel temporal", bytes);
-    for entity in &stale {
-        commands.entity(entity).remove::<VoxelHistory>();
-    }
     for (entity, camera, view, mut outputs, prepass, history) in &mut views {
         let (true, Some(size)) = (view.has(FarTerm::Voxels), view_size(camera)) else {
             commands
