@@ -4,8 +4,7 @@
 # the thousands-of-spheres ones (which stall a GPU with little rasterization hardware),
 # `ao_capture --timings` of Bevy's SSAO against the default, then every GPU test in a process of
 # its own with a time limit, stopping at the first test that outlives it: a GPU that stops
-# answering fails every later test, so later results would say nothing. The one test known to
-# stop an NVIDIA GPU answering (README, "GPU requirements and platforms") runs last.
+# answering fails every later test, so later results would say nothing.
 #
 #   docs/hardware_gpu.sh [OUT_DIR]
 #
@@ -58,9 +57,7 @@ if [ "${BENCH:-1}" != 0 ]; then
 fi
 
 : >"$out/tests.txt"
-last=an_msaa_camera_loses_and_regains_its_ao
-names=$("$tests" --list 2>/dev/null | sed -n 's/: test$//p' | grep -e "${TESTS:-.}")
-{ echo "$names" | grep -v "$last"; echo "$names" | grep "$last"; } | while read -r name; do
+"$tests" --list 2>/dev/null | sed -n 's/: test$//p' | grep -e "${TESTS:-.}" | while read -r name; do
     [ -n "$name" ] || continue
     start=$(date +%s)
     timeout "$limit" "$tests" --exact "$name" --nocapture >"$out/logs/$name.log" 2>&1
