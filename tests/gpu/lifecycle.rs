@@ -91,15 +91,31 @@ fn taking_dynamic_ao_away_turns_the_cameras_ao_off_and_giving_it_back_restores_i
 /// a camera's view from frame to frame, and with it whatever bind groups the passes left there;
 /// with accumulation off (the blur at its full radius) the blur went on running on them after the
 /// removal, into textures Bevy's texture cache had taken back, and on an NVIDIA H200 the GPU
-/// stopped answering a few frames later.
+/// stopped answering a few frames later. Every mesh is a sphere occluder and a voxel volume
+/// covers the scene, as a game sets them up, so the far-field passes must stop too.
 #[test]
 fn no_pass_of_the_plugin_runs_on_a_camera_that_lost_it() {
     let ao = DynamicAo {
         temporal: AoTemporal::OFF,
+        spheres: true,
+        voxels: true,
         ..plain_ao()
     };
     let mut gpu = Gpu::with_render_diagnostics(&scenes::cube_on_plane(), ao.clone());
-    gpu.set_ao(|a| a.technique = AoTechnique::Off);
+    let world = gpu.app.world_mut();
+    let meshes: Vec<Entity> = world
+        .query_filtered::<Entity, With<Mesh3d>>()
+        .iter(world)
+        .collect();
+    for mesh in meshes {
+        world.entity_mut(mesh).insert(SphereOccluder::default());
+    }
+    spawn_volume(world);
+    gpu.set_ao(|a| {
+        a.technique = AoTechnique::Off;
+        a.spheres = false;
+        a.voxels = false;
+    });
     let no_ao = gpu.color(4);
     gpu.set_ao(|a| *a = ao.clone());
     gpu.update(8);
@@ -107,7 +123,14 @@ fn no_pass_of_the_plugin_runs_on_a_camera_that_lost_it() {
     gpu.update(8);
     let running = pass_spans(&mut gpu, false);
     println!("spans while running: {running:?}");
-    for pass in ["back_faces", "near_field", "blur"] {
+    for pass in [
+        "back_faces",
+        "near_field",
+        "blur",
+        "spheres",
+        "voxel_ao",
+        "compose",
+    ] {
         assert!(
             running
                 .iter()
