@@ -37,7 +37,8 @@
 //!    upsampling, and without temporal accumulation smooths it with a separable cross-bilateral
 //!    blur that does not cross depth edges (Bavoil & Sainz 2008), nor creases and panel lines,
 //!    where the normal turns ([`AoBlur::normal_sharpness`]); under accumulation the history
-//!    averages the noise instead ([`AoBlur::accumulated_radius`]). A fine-detail term read from
+//!    averages the noise instead ([`AoBlur::accumulated_radius`]; a viewport too small for half
+//!    resolution, [`DynamicAo::small_viewport_pixels`], keeps a blur of one pixel). A fine-detail term read from
 //!    the full-resolution front layer, for the grooves the ray march's steps step over
 //!    ([`AoBlur::detail_reach`]), joins the ray march's occlusion: in the ray march itself, a
 //!    side a frame, under accumulation, else in the blur's last pass.

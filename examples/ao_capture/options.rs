@@ -103,7 +103,8 @@ pub struct Options {
     /// Draw the back-face layer from every mesh as it is, without coarse copies
     /// (`DynamicAo::coarse_back_faces` off).
     pub full_back_faces: bool,
-    /// Compute the occlusion at half resolution and upsample it.
+    /// Compute the occlusion at half resolution and upsample it, at every size
+    /// (`DynamicAo::small_viewport_pixels` 0).
     pub half_resolution: bool,
     /// Frames rendered with a still camera before the capture, counted from the frame the scene
     /// is ready (default: 4, or where the occlusion is accumulated twice

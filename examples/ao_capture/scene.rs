@@ -8,6 +8,7 @@ use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
 use bevy::world_serialization::{WorldAssetRoot, WorldInstanceReady};
 use bevy_dynamic_ao::prelude::*;
+use bevy_dynamic_ao::settings::DEFAULT_SMALL_VIEWPORT_PIXELS;
 
 use crate::options::FarTerm;
 use crate::{Capture, Stage, compare, undrawable};
@@ -125,6 +126,13 @@ fn scene_ready(
             },
             half_resolution: options.half_resolution
                 || (options.default_technique && options.preset.half_resolution()),
+            // `--half-res` asks for it at every size; the default keeps small viewports at full
+            // resolution, as `DynamicAo::default()` does.
+            small_viewport_pixels: if options.half_resolution {
+                0
+            } else {
+                DEFAULT_SMALL_VIEWPORT_PIXELS
+            },
             spheres: options.far == Some(FarTerm::Spheres),
             fields: options.far == Some(FarTerm::Fields),
             voxels: options.far == Some(FarTerm::Voxels),

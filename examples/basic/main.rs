@@ -155,10 +155,14 @@ fn controls(keys: Res<ButtonInput<KeyCode>>, mut cameras: Query<&mut DynamicAo>)
     }
 }
 
-fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<HelpLine>>) {
-    let (Ok(ao), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
+fn show_settings(
+    cameras: Query<(&DynamicAo, &Camera)>,
+    mut text: Query<&mut Text, With<HelpLine>>,
+) {
+    let (Ok((ao, camera)), Ok(mut text)) = (cameras.single(), text.single_mut()) else {
         return;
     };
+    let viewport = camera.physical_viewport_size().unwrap_or_default();
     let params = ao.near_field;
     text.0 = format!(
         "AO: {} | near field {} samples, back layer {} | radius {:.2} m | blur {} px | half res {} | debug view {}\n\
@@ -168,7 +172,11 @@ fn show_settings(cameras: Query<&DynamicAo>, mut text: Query<&mut Text, With<Hel
         if params.back_layer { "on" } else { "off" },
         ao.radius,
         ao.blur.radius,
-        if ao.half_resolution { "on" } else { "off" },
+        match (ao.half_resolution, ao.half_resolution_at(viewport)) {
+            (_, true) => "on",
+            (true, false) => "on (full at this size)",
+            (false, _) => "off",
+        },
         if ao.debug_view { "on" } else { "off" },
     );
 }

@@ -127,6 +127,10 @@ fn every_documented_default_is_the_real_one() {
         ),
         ("DEFAULT_BLUR_DETAIL_REACH", &DEFAULT_BLUR_DETAIL_REACH),
         ("DEFAULT_RAY_MARCH_THICKNESS", &DEFAULT_RAY_MARCH_THICKNESS),
+        (
+            "DEFAULT_SMALL_VIEWPORT_PIXELS",
+            &DEFAULT_SMALL_VIEWPORT_PIXELS,
+        ),
         ("NearFieldParams::default", &near_field),
         ("HorizonParams::default", &horizon),
         ("RayMarchParams::default", &ray_march),

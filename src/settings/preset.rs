@@ -18,6 +18,9 @@ use super::{
 /// | `High` (the default) | ray march | 32 | 8 × 8, normal | 2 × 1 × 6 | yes | yes |
 /// | `Ultra` | ray march | 64 | 8 × 8, high | 2 × 2 × 8 | yes | yes |
 ///
+/// Half resolution applies above [`DynamicAo::small_viewport_pixels`] (320 × 240); smaller
+/// viewports run every level at full resolution.
+///
 /// The ray march counts what ground truth counts (cosine-weighted rays that hit within R), so
 /// its average over frames converges to the ground truth the ND-buffer can show; a handful of
 /// rays per pixel and frame at half resolution, accumulated, cost less than Bevy's SSAO. Every
@@ -115,7 +118,8 @@ impl AoPreset {
     }
 
     /// Whether this level computes the occlusion at half resolution (every level does: at full
-    /// resolution the same rays cost four times as much for an error lower by a few per cent).
+    /// resolution the same rays cost about four times as much). Viewports up to
+    /// [`DynamicAo::small_viewport_pixels`] run at full resolution all the same.
     pub fn half_resolution(self) -> bool {
         true
     }

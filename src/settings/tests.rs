@@ -15,6 +15,29 @@ fn defaults_are_the_high_level() {
 }
 
 #[test]
+fn small_viewports_run_at_full_resolution() {
+    let ao = DynamicAo::default();
+    // 320 × 240 at full resolution has as many texels as 640 × 480 at half resolution.
+    assert!(!ao.half_resolution_at(UVec2::new(160, 120)));
+    assert!(!ao.half_resolution_at(UVec2::new(320, 240)));
+    assert!(ao.half_resolution_at(UVec2::new(321, 240)));
+    assert!(ao.half_resolution_at(UVec2::new(640, 480)));
+    assert!(ao.half_resolution_at(UVec2::new(1920, 1080)));
+    // Past u32 when multiplied.
+    assert!(ao.half_resolution_at(UVec2::new(u32::MAX, u32::MAX)));
+    let everywhere = DynamicAo {
+        small_viewport_pixels: 0,
+        ..ao.clone()
+    };
+    assert!(everywhere.half_resolution_at(UVec2::ONE));
+    let full = DynamicAo {
+        half_resolution: false,
+        ..ao
+    };
+    assert!(!full.half_resolution_at(UVec2::new(1920, 1080)));
+}
+
+#[test]
 fn each_level_picks_its_technique() {
     // Every level runs the ray march at half resolution, accumulated: without accumulation its
     // noise needs the blur, which costs more than the whole default (README, preset table).

@@ -124,7 +124,8 @@ pub(crate) struct DynamicAoView {
     pub coarse_back_faces: bool,
     /// Blur half-width, pixels (0 = off).
     pub blur_radius: u32,
-    /// Occlusion computed at half resolution and upsampled.
+    /// Occlusion computed at half resolution and upsampled
+    /// ([`crate::DynamicAo::half_resolution_at`] the viewport's size).
     pub half_resolution: bool,
     /// The sphere and field splats drawn at half resolution (compose upsamples them).
     pub far_half_resolution: bool,

@@ -10,7 +10,7 @@ use bevy::render::{
     sync_world::RenderEntity, view::Msaa,
 };
 
-use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend};
+use crate::settings::{AoTechnique, DynamicAo, FarFieldBlend, SMALL_VIEWPORT_BLUR_RADIUS};
 
 use super::layers::layer_bits;
 use super::{DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, PendingPasses};
@@ -171,8 +171,17 @@ pub(super) fn extract_views(
         let temporal = image_space && ao.temporal.enabled;
         let voxel_temporal = voxels && ao.temporal.enabled;
         let voxel_blur_radius = blur.radius;
+        // A viewport Bevy has not sized yet has no texture to run on; its size is checked again
+        // where the textures are made.
+        let viewport = camera.physical_viewport_size().unwrap_or_default();
+        let half_resolution = ao.half_resolution_at(viewport);
         if temporal {
             blur.radius = blur.accumulated_radius;
+            // A small viewport asked for half resolution runs at full resolution, where no
+            // upsampling averages the texels around each pixel: the blur's smallest radius does.
+            if ao.half_resolution && !half_resolution && blur.radius == 0 {
+                blur.radius = SMALL_VIEWPORT_BLUR_RADIUS;
+            }
         }
         // Accumulated, the ray march adds the fine-detail term itself, a side a frame; else the
         // blur's last pass adds all four sides.
@@ -195,8 +204,8 @@ pub(super) fn extract_views(
                 back_normals,
                 coarse_back_faces: back_layer && !back_normals && ao.coarse_back_faces,
                 blur_radius: if image_space { blur.radius } else { 0 },
-                half_resolution: image_space && ao.half_resolution,
-                far_half_resolution: ao.half_resolution,
+                half_resolution: image_space && half_resolution,
+                far_half_resolution: half_resolution,
                 temporal,
                 voxel_temporal,
                 checkerboard,
@@ -227,7 +236,7 @@ pub(super) fn extract_views(
                 ray_march_steps: rays.steps,
                 ray_march_thickness: rays.thickness * near_radius,
                 ray_march_checkerboard: u32::from(checkerboard),
-                far_resolution_scale: if ao.half_resolution { 2 } else { 1 },
+                far_resolution_scale: if half_resolution { 2 } else { 1 },
                 spheres: u32::from(spheres),
                 far_field_blend: ao.far_field_blend.shader_index(),
                 fields: u32::from(fields),

@@ -164,7 +164,8 @@ fn an_open_floor_does_not_darken_itself() {
 
 /// Renders `run`'s image-space technique alone and joined to each far-field term at `radius`,
 /// prints their RMSE against ground truth as `base` and `base+term`, and checks each joined one
-/// against `bound` of the term and the one alone.
+/// against `bound` of the term and the one alone: what failed, one line each.
+#[must_use]
 fn check_joined(
     run: &mut FarRun,
     bvh: &Bvh,
@@ -172,23 +173,26 @@ fn check_joined(
     base: &str,
     radius: f32,
     bound: impl Fn(FarTerm, f32) -> f32,
-) {
+) -> Vec<String> {
     let alone = run.render(true, None, count_once(), radius);
     let truth = alone.ground_truth(bvh, radius);
     let mask = alone.geometry_mask();
     let alone_error = rmse(&alone.visibility, &truth, Some(&mask));
     let mut line = format!("{name}, R = {radius} m: RMSE {base} {alone_error:.4}");
+    let mut failed = Vec::new();
     for term in FarTerm::ALL {
         let joined = run.render(true, Some(term), count_once(), radius);
         let error = rmse(&joined.visibility, &truth, Some(&mask));
         line += &format!(", {base}+{} {error:.4}", term.name());
-        assert!(
-            error <= bound(term, alone_error),
-            "{name}, R = {radius} m: {base}+{} {error:.4} against {base} alone {alone_error:.4}",
-            term.name()
-        );
+        if error > bound(term, alone_error) {
+            failed.push(format!(
+                "{name}, R = {radius} m: {base}+{} {error:.4} against {base} alone {alone_error:.4}",
+                term.name()
+            ));
+        }
     }
     println!("{line}");
+    failed
 }
 
 /// In view, the near field already sees the occluders: joined to it, each term must not make the
@@ -207,18 +211,30 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
     for scene in all {
         let mut run = FarRun::new(&scene, None);
         let bvh = run.bvh();
-        check_joined(&mut run, &bvh, scene.name, "near", 0.75, |_, near| near);
-        check_joined(&mut run, &bvh, scene.name, "near", 2.0, |_, near| {
-            0.70 * near
-        });
+        let mut failed = check_joined(&mut run, &bvh, scene.name, "near", 0.75, |_, near| near);
+        failed.extend(check_joined(
+            &mut run,
+            &bvh,
+            scene.name,
+            "near",
+            2.0,
+            |_, near| 0.70 * near,
+        ));
+        assert!(failed.is_empty(), "{failed:?}");
     }
 }
 
 /// Each term joined to the crate's default image-space technique (the accumulated ray march) on
 /// characters standing on a floor, every mesh an occluder: never worse than the default alone at
-/// 0.75 m, but for the walker's voxels (at most 5% worse), and at 2 m, where most of what occludes
-/// a character lies beyond the near field's reach, at least a tenth better, but for the voxels
-/// (at least 5%: the walker 0.0251 against the default's 0.0268, 0.94×, since a ray through a
+/// 0.75 m, but for the voxels (at most 5% worse), and at 2 m, where most of what occludes a
+/// character lies beyond the near field's reach, at least a tenth better, but for the voxels (at
+/// least 2%). At this size the default runs at full resolution (`DynamicAo::small_viewport_pixels`),
+/// which brought it alone closer to the truth than at half resolution and left the terms less to
+/// add. Measured: the walker 0.0222 alone at 0.75 m, 0.0207 / 0.0219 / 0.0214 joined (spheres /
+/// fields / voxels), at 2 m 0.0232 and 0.0199 / 0.0199 / 0.0225 (the voxels 0.97×); CesiumMan
+/// 0.0133 at 0.75 m, 0.0124 / 0.0134 / 0.0139 (the voxels 1.05×), at 2 m 0.0199 and 0.0129 /
+/// 0.0132 / 0.0194 (the voxels 0.97×). At half resolution the voxels
+/// gained at least 5% at 2 m (the walker 0.0251 against the default's 0.0268, 0.94×, since a ray through a
 /// sheet towards the camera counts as blocked, which brought the default alone closer; 0.0251
 /// against 0.0275, 0.91×, and CesiumMan 0.0237 against 0.0262, 0.90×, since the default's rays'
 /// last step lies at R; under 0.9× before). Measured, the default
@@ -241,33 +257,41 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
                 .map(|s| (s, Some(folder))),
         );
     }
+    let mut failed = Vec::new();
     for (scene, folder) in scenes {
         let mut run = FarRun::new(&scene, folder);
         run.image_space = DynamicAo::default();
         let bvh = run.bvh();
-        let walker = scene.name == "walker on floor";
-        check_joined(
+        failed.extend(check_joined(
             &mut run,
             &bvh,
             scene.name,
             "default",
             0.75,
             |term, alone| {
-                if walker && term == FarTerm::Voxels {
+                if term == FarTerm::Voxels {
                     1.05 * alone
                 } else {
                     alone + 0.0005
                 }
             },
-        );
-        check_joined(&mut run, &bvh, scene.name, "default", 2.0, |term, alone| {
-            if term == FarTerm::Voxels {
-                0.95 * alone
-            } else {
-                0.9 * alone
-            }
-        });
+        ));
+        failed.extend(check_joined(
+            &mut run,
+            &bvh,
+            scene.name,
+            "default",
+            2.0,
+            |term, alone| {
+                if term == FarTerm::Voxels {
+                    0.98 * alone
+                } else {
+                    0.9 * alone
+                }
+            },
+        ));
     }
+    assert!(failed.is_empty(), "{failed:?}");
 }
 
 /// A closed ring on a floor, every mesh a far-field occluder. Sphere proxies: the ring's box
@@ -281,7 +305,10 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// below), on the bumpy ring 1.06× joined to the near field at 0.75 m. Joined to the near field
 /// each term must lower the error at both radii, joined to the default at 0.75 m; at 2 m the
 /// default alone does better than either joined. Measured here, joined against alone, near field at
-/// 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.96×, 1.55× (1.57× on an NVIDIA H200);
+/// 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.97×, 1.92×; fields 0.70×, 0.55×,
+/// 0.77×, 1.16×. The default runs at full resolution at this size (`DynamicAo::small_viewport_pixels`),
+/// which took it alone at 2 m from 0.0208 to 0.0166, while joined it reads 0.0318 and 0.0193 as at
+/// half resolution. At half resolution: spheres 0.63×, 0.46×, 0.96×, 1.55× (1.57× on an NVIDIA H200);
 /// fields 0.70×, 0.55×, 0.80×, 0.97× (the default's 0.74×, 1.43×, 0.67× and 1.02× before its rays'
 /// last step lay at R: that lowered the default alone at 0.75 m to 0.0293, more than the joined
 /// images, whose march stops at `near_field_radius`). The default alone at 2 m reads 0.0208 since
@@ -318,7 +345,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.98), (2.0, 1.58)],
+            [(0.75, 0.98), (2.0, 1.94)],
         ),
         (
             FarTerm::Fields,
@@ -330,7 +357,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Fields,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.82), (2.0, 1.04)],
+            [(0.75, 0.79), (2.0, 1.18)],
         ),
     ];
     let mut failed = Vec::new();
@@ -457,6 +484,8 @@ fn half_resolution_splats_stay_as_close_to_ground_truth() {
                 let mut frames = Vec::new();
                 for half in [false, true] {
                     run.image_space.half_resolution = half;
+                    // At every size, this one included.
+                    run.image_space.small_viewport_pixels = 0;
                     frames.push(run.render(false, Some(term), count_once(), radius));
                 }
                 let truth = truth.get_or_insert_with(|| frames[0].ground_truth(&bvh, radius));

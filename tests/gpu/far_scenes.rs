@@ -312,6 +312,7 @@ impl FarRun {
             ao.horizon = image_space.horizon;
             ao.ray_march = image_space.ray_march;
             ao.half_resolution = image_space.half_resolution;
+            ao.small_viewport_pixels = image_space.small_viewport_pixels;
             ao.blur = image_space.blur;
             ao.temporal = image_space.temporal;
             ao.coarse_back_faces = image_space.coarse_back_faces;

@@ -9,7 +9,7 @@ use bevy_dynamic_ao::reference::{
     near_field::{NearFieldInputs, pixel_occlusion},
 };
 
-use crate::harness::{Frame, Gpu, HEIGHT, WIDTH, difference_stats, plain_ao};
+use crate::harness::{Frame, Gpu, HEIGHT, WIDTH, difference_stats, largest_difference, plain_ao};
 use crate::scenes;
 
 /// The same steps on the CPU as the GPU takes them for `frame`: the near-field formula at every
@@ -49,6 +49,7 @@ fn half_resolution_matches_the_cpu_and_stays_close_to_full_resolution() {
         let full_ao = plain_ao().with_radius(radius);
         let half_ao = DynamicAo {
             half_resolution: true,
+            small_viewport_pixels: 0,
             ..full_ao.clone()
         };
         let mut gpu = Gpu::new(&scene, full_ao);
@@ -87,6 +88,7 @@ fn half_resolution_matches_the_cpu_on_an_odd_sized_view() {
     let size = UVec2::new(WIDTH - 1, HEIGHT - 1);
     let ao = DynamicAo {
         half_resolution: true,
+        small_viewport_pixels: 0,
         ..plain_ao().with_radius(radius)
     };
     for (name, scene) in scenes::all() {
@@ -148,6 +150,7 @@ fn the_last_filter_pass_writes_the_cpu_visibility_on_third_party_models() {
         for (radius, blur) in [(0.75, 0), (0.75, 4), (2.0, 0), (2.0, 4)] {
             let ao = DynamicAo {
                 half_resolution: true,
+                small_viewport_pixels: 0,
                 blur: AoBlur {
                     radius: blur,
                     ..AoBlur::default()
@@ -177,5 +180,104 @@ fn the_last_filter_pass_writes_the_cpu_visibility_on_third_party_models() {
                 scene.name
             );
         }
+    }
+}
+
+/// Whether each of the plugin's pass spans named in `passes` reported over the last 8 frames.
+fn passes_running(gpu: &mut Gpu, passes: &[&str]) -> Vec<bool> {
+    gpu.update(8);
+    crate::harness::pass_spans(gpu, true);
+    gpu.update(8);
+    let spans = crate::harness::pass_spans(gpu, false);
+    passes
+        .iter()
+        .map(|pass| {
+            spans
+                .iter()
+                .any(|(path, n)| path.contains(&format!("dynamic_ao_{pass}")) && *n > 0)
+        })
+        .collect()
+}
+
+/// At the harness's 160 × 120, under `DynamicAo::small_viewport_pixels`, the default runs at full
+/// resolution with the blur of `SMALL_VIEWPORT_BLUR_RADIUS` under accumulation and no upsampling;
+/// with the rule off (0) at half resolution, upsampled and not blurred; asked for full resolution
+/// outright, without the blur (the user's `AoBlur::accumulated_radius` of 0 stands). Told by
+/// which passes report GPU time spans.
+#[test]
+fn a_small_viewport_runs_at_full_resolution_with_a_blur_of_one_pixel() {
+    use bevy_dynamic_ao::settings::DEFAULT_SMALL_VIEWPORT_PIXELS;
+    const { assert!(WIDTH * HEIGHT <= DEFAULT_SMALL_VIEWPORT_PIXELS) };
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::with_render_diagnostics(&scene, DynamicAo::default());
+    let passes = ["ray_march", "upsample", "blur", "temporal"];
+    let cases = [
+        (
+            "the default",
+            DynamicAo::default(),
+            [true, false, true, true],
+        ),
+        (
+            "half resolution at every size",
+            DynamicAo {
+                small_viewport_pixels: 0,
+                ..DynamicAo::default()
+            },
+            [true, true, false, true],
+        ),
+        (
+            "full resolution asked for",
+            DynamicAo {
+                half_resolution: false,
+                ..DynamicAo::default()
+            },
+            [true, false, false, true],
+        ),
+    ];
+    for (name, ao, expected) in cases {
+        gpu.set_ao(|current| *current = ao);
+        let running = passes_running(&mut gpu, &passes);
+        assert_eq!(
+            running,
+            expected.to_vec(),
+            "{name}: which of {passes:?} run"
+        );
+    }
+}
+
+/// A view that switches between full and half resolution at runtime (here by
+/// `DynamicAo::small_viewport_pixels`; a window resized across it does the same) renders what a
+/// fresh app with the new settings renders, with nothing of the other resolution left: one
+/// fixed pattern of rays (accumulation off), so the frames must agree to the last bits.
+#[test]
+fn switching_resolution_at_runtime_leaves_nothing_stale() {
+    let scene = scenes::cube_on_plane();
+    let full = DynamicAo {
+        temporal: AoTemporal::OFF,
+        ..DynamicAo::default()
+    };
+    let half = DynamicAo {
+        small_viewport_pixels: 0,
+        ..full.clone()
+    };
+    let fresh = |ao: &DynamicAo| Gpu::new(&scene, ao.clone()).frame(4).visibility;
+    let (full_image, half_image) = (fresh(&full), fresh(&half));
+    let apart = largest_difference(&full_image, &half_image);
+    assert!(
+        apart > 0.05,
+        "the two resolutions differ by {apart} at most"
+    );
+    let mut gpu = Gpu::new(&scene, full.clone());
+    for (name, ao, expected) in [
+        ("to half", &half, &half_image),
+        ("back to full", &full, &full_image),
+        ("to half again", &half, &half_image),
+    ] {
+        gpu.set_ao(|current| *current = ao.clone());
+        let difference = largest_difference(&gpu.frame(4).visibility, expected);
+        assert!(
+            difference < 1e-4,
+            "{name}: {difference} from a fresh app's frame"
+        );
     }
 }

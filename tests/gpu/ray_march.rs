@@ -176,18 +176,23 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
     };
     // Each scene with the most its RMSE may be, as a share of its RMSE at thickness 0: 8 × 4
     // rays in one frame, and the default converged (`converged_frames`: 64 frames under the
-    // checkerboard). Measured: 0.59 / 0.62, 1.08 / 1.00, 0.98 / 0.89, 1.02 / 0.92, 0.73 / 0.75
+    // checkerboard). Measured: 0.60 / 0.60, 1.08 / 1.22, 0.98 / 0.88, 1.01 / 0.94, 0.73 / 0.72 with
+    // the default at full resolution, which it runs at this size (`DynamicAo::small_viewport_pixels`):
+    // on cube on plane the thickness now costs the default a fifth (0.0101 against 0.0083), as it
+    // costs the 8 × 4 rays 8%, where half resolution's upsampling had hidden it. At half
+    // resolution: 0.59 / 0.62, 1.08 / 1.00, 0.98 / 0.89, 1.02 / 0.92, 0.73 / 0.75
     // since the rays' last step lies at R (before: 0.60 / 0.64, 1.04 / 0.96, 0.99 / 0.97,
     // 0.98 / 0.86, 0.75 / 0.77). On cube on plane's open floor and beside the ball the thickness
     // changes little (the default 0.0102 either way on cube on plane), and the two images differ
     // by their noise as much.
     let scenes = [
-        ("shells on floor", scenes::shells_on_floor(), 0.62, 0.65),
-        ("cube on plane", scenes::cube_on_plane(), 1.1, 1.02),
-        ("room corner", scenes::room_corner(), 1.0, 0.98),
-        ("ball near wall", scenes::ball_near_wall(), 1.04, 0.94),
-        ("open room", scenes::open_room(), 0.77, 0.79),
+        ("shells on floor", scenes::shells_on_floor(), 0.62, 0.62),
+        ("cube on plane", scenes::cube_on_plane(), 1.1, 1.24),
+        ("room corner", scenes::room_corner(), 1.0, 0.9),
+        ("ball near wall", scenes::ball_near_wall(), 1.04, 0.96),
+        ("open room", scenes::open_room(), 0.77, 0.75),
     ];
+    let mut failed = Vec::new();
     for (name, scene, many_rays_bound, default_bound) in scenes {
         let mut gpu = Gpu::new(&scene, many_rays(0.0));
         let as_air = gpu.frame(4);
@@ -225,15 +230,18 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
             p99 <= 0.5 + 1e-3,
             "{name}: 99th percentile |GPU − CPU| = {p99}"
         );
-        assert!(
-            solid <= many_rays_bound * air,
-            "{name}: 8 × 4 rays {solid} with the thickness, {air} without"
-        );
-        assert!(
-            default <= default_bound * default_as_air,
-            "{name}: the default {default} with the thickness, {default_as_air} without"
-        );
+        if solid > many_rays_bound * air {
+            failed.push(format!(
+                "{name}: 8 × 4 rays {solid} with the thickness, {air} without"
+            ));
+        }
+        if default > default_bound * default_as_air {
+            failed.push(format!(
+                "{name}: the default {default} with the thickness, {default_as_air} without"
+            ));
+        }
     }
+    assert!(failed.is_empty(), "{failed:?}");
 }
 
 /// The thickness on scenes set up as a user sets them up: third-party models on a floor
@@ -247,7 +255,14 @@ fn a_step_just_behind_the_back_face_layer_counts_as_blocked() {
 #[test]
 fn the_thickness_holds_with_every_mesh_an_occluder() {
     // Scene, and the most RMSE with the thickness may be as a share of RMSE without it, alone and
-    // joined, over both radii. Measured (0.75 m, 2 m; the default converged over 64 frames under
+    // joined, over both radii. Measured at full resolution, which the default runs at this size
+    // (`DynamicAo::small_viewport_pixels`; 0.75 m, 2 m): the walker 1.22×, 0.75× alone and
+    // 1.45×, 1.36× joined (the default alone 0.0222 and 0.0233, lower than at half
+    // resolution's 0.0245 and 0.0268, but lower still without the thickness, which counts the
+    // air between its limbs as solid); CesiumMan 0.85×, 0.69×
+    // and 0.99×, 1.05×; DamagedHelmet 0.87×, 0.80× and 0.97×, 0.97×; the Cornell box 0.91×, 0.98×
+    // and 0.91×, 0.97×. At half resolution
+    // (the default converged over 64 frames under
     // its checkerboard, a step behind a two-sided sheet judged as where no back face was drawn):
     // the walker 1.07×, 0.76× alone and 1.19×, 1.14× joined; DamagedHelmet 0.86×, 0.81× and
     // 0.97×, 0.98×; CesiumMan 0.89×, 0.78× and 0.91×, 1.00×; the Cornell box 0.91×, 0.99× and
@@ -269,11 +284,11 @@ fn the_thickness_holds_with_every_mesh_an_occluder() {
     // blur that softened the thickness's excess between the limbs; `temporal.wgsl`,
     // `mean_bounds`), and 1.11×, 0.81× and 1.18×, 1.16× before the checkerboard.
     let bounds = [
-        ("walker on floor", 1.08, 1.21),
+        ("walker on floor", 1.24, 1.47),
         ("box beside view", 1.005, 1.005),
         ("wall beside view", 1.005, 1.005),
         ("DamagedHelmet on floor", 0.88, 0.99),
-        ("CesiumMan on floor", 0.9, 1.01),
+        ("CesiumMan on floor", 0.9, 1.07),
         ("CornellBox on floor", 1.0, 0.97),
     ];
     let shared = crate::models::shared_assets();

@@ -275,13 +275,15 @@ fn accumulation_holds_on_scenes_with_every_mesh_an_occluder() {
                 .set_ao(|ao| accumulated(ao, AoPreset::Medium.near_field()));
             let sixteen = run.gpu.frame(30);
             let sixteen_error = rmse(&sixteen.visibility, &truth, Some(&mask));
-            // The crate's default image-space technique (the accumulated ray march at half
-            // resolution), joined to the same far field.
+            // The crate's default image-space technique (the accumulated ray march, at full
+            // resolution at this size: `DynamicAo::small_viewport_pixels`), joined to the same
+            // far field.
             run.gpu.set_ao(|ao| {
                 let default = DynamicAo::default();
                 ao.technique = default.technique;
                 ao.ray_march = default.ray_march;
                 ao.half_resolution = default.half_resolution;
+                ao.small_viewport_pixels = default.small_viewport_pixels;
                 ao.near_field = default.near_field;
             });
             let default = run.gpu.frame(30);

@@ -266,13 +266,15 @@ fn captures_the_far_field_of_the_generated_scene() {
         // What `DynamicAo::default()` runs (the accumulated ray march) with each term joined.
         let default = error(&capture("default", radius, &[]));
         println!("ao_capture, R = {radius} m: default RMSE {default:.4}");
-        // Measured: 0.0097 at 0.75 m, 0.0175 at 2 m since the last step lies at R (0.0105 /
+        // Measured: 0.0094 at 0.75 m, 0.0168 at 2 m at full resolution, which the default runs
+        // at this size (`DynamicAo::small_viewport_pixels`). At half resolution: 0.0097 at
+        // 0.75 m, 0.0175 at 2 m since the last step lies at R (0.0105 /
         // 0.0190 before; 0.0136 / 0.0488 before steps just behind the back-face layer counted
         // as blocked, `RayMarchParams::thickness`). The scene's floor
         // is a slab: with each pixel's farthest back face in the ray march's layer, the air
         // between a box and the slab's underside behind it read as solid, and this read 0.0467 /
         // 0.0560 (BENCHMARKS.md, "DamagedHelmet close up", tried and not kept).
-        let bound = if radius < 1.0 { 0.0105 } else { 0.019 };
+        let bound = if radius < 1.0 { 0.0103 } else { 0.0185 };
         assert!(
             default < bound,
             "the default at {radius} m: RMSE {default:.4} against ground truth"
@@ -280,13 +282,16 @@ fn captures_the_far_field_of_the_generated_scene() {
         for term in ["spheres", "fields", "voxels"] {
             let joined = error(&capture(&format!("default+{term}"), radius, &[]));
             println!("  default+{term} {joined:.4}");
-            // Measured: 0.81–0.92 × the default's RMSE at 0.75 m, 0.58–0.75 × at 2 m since the
+            // Measured at full resolution, which the default runs at this size
+            // (`DynamicAo::small_viewport_pixels`): 0.76–0.94 × the default's RMSE at 0.75 m,
+            // 0.57–0.79 × at 2 m (the default alone 0.0094 and 0.0168). At half resolution:
+            // 0.81–0.92 × the default's RMSE at 0.75 m, 0.58–0.75 × at 2 m since the
             // default's last step lies at R, which lowered the default alone and not the joined
             // figures (0.84–0.95 and 0.62–0.71 before; 0.89–0.94 and 0.35–0.37 against the default
             // before the thickness, which itself gained most at 2 m; joined, the error fell at
             // both radii). At 0.75 m the default alone is within 0.0097 of the truth here, and the
             // terms join it at 0.0079–0.0089: no term may raise it.
-            let bound = if radius < 1.0 { 1.0 } else { 0.77 };
+            let bound = if radius < 1.0 { 1.0 } else { 0.8 };
             assert!(
                 joined <= bound * default,
                 "default+{term} at {radius} m: {joined} vs {default}"

@@ -90,16 +90,25 @@ fn default_technique_and_timings() {
     let rmse = |a: &[f32], b: &[f32]| {
         (a.iter().zip(b).map(|(a, b)| (a - b).powi(2)).sum::<f32>() / a.len() as f32).sqrt()
     };
-    // `default` is what `DynamicAo::default()` runs: the ray march of preset High at half
-    // resolution, accumulated.
+    // `default` is what `DynamicAo::default()` runs: the ray march of preset High, accumulated,
+    // at full resolution at this size (`DynamicAo::small_viewport_pixels`), and at half
+    // resolution where `--half-res` asks for it at every size.
     let (default, text) = capture("default", &["--no-temporal"]);
-    let (ray_march, _) = capture("ray-march", &["--half-res", "--no-temporal"]);
-    let differ = default
-        .iter()
-        .zip(&ray_march)
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(differ, 0, "--technique default is the default ray march");
+    let (half, _) = capture("default", &["--half-res", "--no-temporal"]);
+    for (ours, reference) in [
+        (&default, capture("ray-march", &["--no-temporal"]).0),
+        (
+            &half,
+            capture("ray-march", &["--half-res", "--no-temporal"]).0,
+        ),
+    ] {
+        let differ = ours.iter().zip(&reference).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "--technique default is the default ray march");
+    }
+    assert_ne!(
+        half, default,
+        "--half-res halves the resolution of a small capture"
+    );
     let (accumulated, _) = capture("default", &[]);
     let moved = accumulated
         .iter()
@@ -132,13 +141,14 @@ fn default_technique_and_timings() {
         );
     }
     assert!(!text.contains("timings:"), "no timings line unless asked");
-    // With --preset low, `default` is the Low preset: the ray march at half resolution,
-    // accumulated, with Low's budget (which differs from the default's).
+    // With --preset low, `default` is the Low preset: the ray march, accumulated, with Low's
+    // budget (which differs from the default's), at full resolution at this size and so with the
+    // blur of `SMALL_VIEWPORT_BLUR_RADIUS`.
     let (low, _) = capture("default", &["--preset", "low"]);
-    let (ray_march_half, _) = capture("ray-march", &["--preset", "low", "--half-res"]);
+    let (ray_march_low, _) = capture("ray-march", &["--preset", "low", "--accumulated-blur", "1"]);
     let differ = low
         .iter()
-        .zip(&ray_march_half)
+        .zip(&ray_march_low)
         .filter(|(a, b)| a != b)
         .count();
     assert_eq!(differ, 0, "--technique default follows --preset");
