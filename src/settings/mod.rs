@@ -29,8 +29,8 @@ pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.5;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
 /// Default [`DynamicAo::small_viewport_pixels`]: 320 × 240. A viewport of this size at full
-/// resolution has as many AO texels as 640 × 480 at half resolution, so no viewport up to it
-/// costs more than that one does.
+/// resolution has as many AO texels as 640 × 480 at half resolution, so a viewport up to it
+/// costs about what that one does at most.
 pub const DEFAULT_SMALL_VIEWPORT_PIXELS: u32 = 320 * 240;
 /// The blur's half-width under accumulation on a viewport that [`DynamicAo::half_resolution`]
 /// asked to halve and [`DynamicAo::small_viewport_pixels`] kept at full resolution, where
@@ -108,9 +108,9 @@ pub struct DynamicAo {
     /// accumulation blur it by [`SMALL_VIEWPORT_BLUR_RADIUS`] where
     /// [`AoBlur::accumulated_radius`] is 0, in place of the upsampling's averaging. There a
     /// half-resolution texel is too coarse for the detail a model shows (at 160 × 120 a heat
-    /// sink's 8 mm fins read an RMSE of FINS_HALF against ground truth at half resolution,
-    /// FINS_FULL so; README, "Cost and error"), and the full-resolution passes cost no more than
-    /// half resolution's do on a viewport of four times as many pixels. `0` keeps half
+    /// sink's 8 mm fins read an RMSE of 0.068 against ground truth at half resolution, 0.044 at
+    /// full; README, "Cost and error"), and the full-resolution passes cost about what half
+    /// resolution's do on a viewport of four times as many pixels. `0` keeps half
     /// resolution at every size. Units: pixels. Default: [`DEFAULT_SMALL_VIEWPORT_PIXELS`]
     /// (320 × 240).
     pub small_viewport_pixels: u32,

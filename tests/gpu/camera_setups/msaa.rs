@@ -373,10 +373,12 @@ fn msaa_sees_through_an_alpha_masked_grille() {
     // 0.0055 before the term; 0.0033 and 0.0104 while the temporal clamp pulled a plane's edge
     // toward the plane's inside, which also evened out those pixels). 0.0046 and 0.0145 since
     // each ray's last step lies at R: the rays of those pixels reach R on every frame, and
-    // what they meet there differs between the two layers' surfaces more often.
-    assert!(error <= 0.0049, "MSAA against plain RMSE {error}");
+    // what they meet there differs between the two layers' surfaces more often. 0.0030 and
+    // 0.0096 at full resolution, which the default runs at this size
+    // (`DynamicAo::small_viewport_pixels`), where each pixel's rays are its own.
+    assert!(error <= 0.0035, "MSAA against plain RMSE {error}");
     assert!(
-        grille_error <= 0.0155,
+        grille_error <= 0.0112,
         "MSAA against plain RMSE {grille_error} on the grille"
     );
     let msaa_bars = covered(&msaa);
