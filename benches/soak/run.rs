@@ -94,7 +94,7 @@ pub const RSS_GROWTH_BOUND: u64 = 8 << 20;
 const RSS_STOP: u64 = 4 << 30;
 /// Most GPU bytes the plugin may hold at any checkpoint: the run's largest state (a 32³ voxel
 /// grid, six small fields of 112 bytes per cell, the temporal histories of an 80×60 view) took
-/// 407,216 bytes in CI's 1,000 frames since views of at most 320×240 run at full resolution
+/// 407,216 bytes in CI's 1,000 frames since views of at most 240×180 run at full resolution
 /// (`DynamicAo::small_viewport_pixels`: the histories and the blur's textures are 80×60, not
 /// 40×30); at half resolution 292,016 bytes in the 10,000-frame run and 264,368 in CI's.
 pub const GPU_BYTES_BOUND: u64 = 448 << 10;

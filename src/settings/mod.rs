@@ -28,10 +28,13 @@ pub const DEFAULT_RADIUS: f32 = 0.75;
 pub const DEFAULT_NEAR_FIELD_RADIUS: f32 = 0.5;
 /// Default multiplier applied to the summed occlusion (no unit).
 pub const DEFAULT_INTENSITY: f32 = 1.0;
-/// Default [`DynamicAo::small_viewport_pixels`]: 320 × 240. A viewport of this size at full
-/// resolution has as many AO texels as 640 × 480 at half resolution, so a viewport up to it
-/// costs about what that one does at most.
-pub const DEFAULT_SMALL_VIEWPORT_PIXELS: u32 = 320 * 240;
+/// Default [`DynamicAo::small_viewport_pixels`]: 240 × 180. Above it, at half resolution, every
+/// scene of the README's error table reads at most 0.29× Bevy's SSAO High's RMSE (the heat sink
+/// and DamagedHelmet close up, 240 × 180, R = 0.73 m), and the AO passes cost 0.43–0.46× Bevy's
+/// (256 × 192); at full resolution they cost 1.1–1.3× Bevy's at 240 × 180 and 1.3× at 320 × 240.
+/// At 200 × 150 half resolution reads 0.33× on the heat sink (BENCHMARKS.md, "Half resolution
+/// from 240 × 180 up").
+pub const DEFAULT_SMALL_VIEWPORT_PIXELS: u32 = 240 * 180;
 /// The blur's half-width under accumulation on a viewport that [`DynamicAo::half_resolution`]
 /// asked to halve and [`DynamicAo::small_viewport_pixels`] kept at full resolution, where
 /// [`AoBlur::accumulated_radius`] is 0, pixels. At half resolution the upsampling averages the
@@ -109,10 +112,11 @@ pub struct DynamicAo {
     /// [`AoBlur::accumulated_radius`] is 0, in place of the upsampling's averaging. There a
     /// half-resolution texel is too coarse for the detail a model shows (at 160 × 120 a heat
     /// sink's 8 mm fins read an RMSE of 0.068 against ground truth at half resolution, 0.044 at
-    /// full; README, "Cost and error"), and the full-resolution passes cost about what half
-    /// resolution's do on a viewport of four times as many pixels. `0` keeps half
-    /// resolution at every size. Units: pixels. Default: [`DEFAULT_SMALL_VIEWPORT_PIXELS`]
-    /// (320 × 240).
+    /// full; README, "Cost and error"). The price is the cost: at full resolution the passes
+    /// cost about what half resolution's do on a viewport of four times as many pixels, more
+    /// than Bevy's SSAO High does on the same one. Raise it where detail matters more than
+    /// cost on larger views; `0` keeps half resolution at every size. Units: pixels. Default: [`DEFAULT_SMALL_VIEWPORT_PIXELS`]
+    /// (240 × 180).
     pub small_viewport_pixels: u32,
     /// Add the far-field occlusion of every [`SphereOccluder`](crate::spheres::SphereOccluder)'s
     /// proxies in the scene (Shanmugam & Arikan 2007, §5), also from occluders that are

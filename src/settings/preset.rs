@@ -18,7 +18,7 @@ use super::{
 /// | `High` (the default) | ray march | 32 | 8 × 8, normal | 2 × 1 × 6 | yes | yes |
 /// | `Ultra` | ray march | 64 | 8 × 8, high | 2 × 2 × 8 | yes | yes |
 ///
-/// Half resolution applies above [`DynamicAo::small_viewport_pixels`] (320 × 240); smaller
+/// Half resolution applies above [`DynamicAo::small_viewport_pixels`] (240 × 180); smaller
 /// viewports run every level at full resolution.
 ///
 /// The ray march counts what ground truth counts (cosine-weighted rays that hit within R), so

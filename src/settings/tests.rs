@@ -17,10 +17,10 @@ fn defaults_are_the_high_level() {
 #[test]
 fn small_viewports_run_at_full_resolution() {
     let ao = DynamicAo::default();
-    // 320 × 240 at full resolution has as many texels as 640 × 480 at half resolution.
     assert!(!ao.half_resolution_at(UVec2::new(160, 120)));
-    assert!(!ao.half_resolution_at(UVec2::new(320, 240)));
-    assert!(ao.half_resolution_at(UVec2::new(321, 240)));
+    assert!(!ao.half_resolution_at(UVec2::new(240, 180)));
+    assert!(ao.half_resolution_at(UVec2::new(241, 180)));
+    assert!(ao.half_resolution_at(UVec2::new(320, 240)));
     assert!(ao.half_resolution_at(UVec2::new(640, 480)));
     assert!(ao.half_resolution_at(UVec2::new(1920, 1080)));
     // Past u32 when multiplied.

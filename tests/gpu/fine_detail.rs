@@ -241,7 +241,7 @@ fn the_blurs_normal_weight_keeps_detail_on_third_party_models() {
 /// same way). At this size the default runs at full resolution
 /// (`DynamicAo::small_viewport_pixels`): under 0.29× Bevy's SSAO High's error, with less
 /// high-frequency error, and more of the one-pixel panel lines than at half resolution, which
-/// views over 320 × 240 run and which stays under 0.34× Bevy's error here.
+/// views over 240 × 180 run and which stays under 0.34× Bevy's error here.
 #[test]
 fn a_close_up_of_a_finely_detailed_model() {
     let Some(shared) = crate::models::shared_assets() else {
@@ -250,7 +250,7 @@ fn a_close_up_of_a_finely_detailed_model() {
     let scene = close_up();
     let mut run = FarRun::new(&scene, shared.to_str());
     let bvh = run.bvh();
-    // What the default runs on a view over 320 × 240.
+    // What the default runs on a view over 240 × 180.
     let half_resolution = DynamicAo {
         small_viewport_pixels: 0,
         ..DynamicAo::default()
@@ -544,7 +544,7 @@ fn the_fine_detail_term_holds_with_every_mesh_an_occluder() {
 /// against the CPU ray tracer at Bevy's radius and at 2 m. At this size the default runs at full
 /// resolution (`DynamicAo::small_viewport_pixels`) and keeps the fins' detail: under a quarter
 /// of Bevy's SSAO High's RMSE and under half its high-frequency error. At half resolution, which
-/// views over 320 × 240 run, it keeps about a third of Bevy's RMSE and 0.7× its high-frequency
+/// views over 240 × 180 run, it keeps about a third of Bevy's RMSE and 0.7× its high-frequency
 /// error (fin tops bright between dark gaps): what is finer than a texel is lost. Rays towards
 /// the camera go through the next fin between two steps (`came_through_from_behind` in
 /// `march.wgsl`). This scene is where the default is furthest from the truth (BENCHMARKS.md,
@@ -555,7 +555,7 @@ fn fins_keep_their_detail() {
     let scene = crate::scenes::heat_sink();
     let bvh = scene.bvh();
     let mut gpu = Gpu::new(&scene, DynamicAo::default());
-    // What the default runs on a view over 320 × 240.
+    // What the default runs on a view over 240 × 180.
     let half_resolution = DynamicAo {
         small_viewport_pixels: 0,
         ..DynamicAo::default()

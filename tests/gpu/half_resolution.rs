@@ -202,8 +202,9 @@ fn passes_running(gpu: &mut Gpu, passes: &[&str]) -> Vec<bool> {
 /// At the harness's 160 × 120, under `DynamicAo::small_viewport_pixels`, the default runs at full
 /// resolution with the blur of `SMALL_VIEWPORT_BLUR_RADIUS` under accumulation and no upsampling;
 /// with the rule off (0) at half resolution, upsampled and not blurred; asked for full resolution
-/// outright, without the blur (the user's `AoBlur::accumulated_radius` of 0 stands). Told by
-/// which passes report GPU time spans.
+/// outright, without the blur (the user's `AoBlur::accumulated_radius` of 0 stands). The limit
+/// counts the view's own pixels: a view of exactly that many runs at full resolution, one pixel
+/// more at half. Told by which passes report GPU time spans.
 #[test]
 fn a_small_viewport_runs_at_full_resolution_with_a_blur_of_one_pixel() {
     use bevy_dynamic_ao::settings::DEFAULT_SMALL_VIEWPORT_PIXELS;
@@ -221,6 +222,22 @@ fn a_small_viewport_runs_at_full_resolution_with_a_blur_of_one_pixel() {
             "half resolution at every size",
             DynamicAo {
                 small_viewport_pixels: 0,
+                ..DynamicAo::default()
+            },
+            [true, true, false, true],
+        ),
+        (
+            "a limit of exactly this view's pixels",
+            DynamicAo {
+                small_viewport_pixels: WIDTH * HEIGHT,
+                ..DynamicAo::default()
+            },
+            [true, false, true, true],
+        ),
+        (
+            "a limit one pixel under this view's",
+            DynamicAo {
+                small_viewport_pixels: WIDTH * HEIGHT - 1,
                 ..DynamicAo::default()
             },
             [true, true, false, true],
