@@ -8,7 +8,9 @@
 //! `SphereOccluder` each, scattered over the view) with the image-space term off; the
 //! `AO fields, N occluders` rows draw N toaster-sized boxes with an `AoField` each (one baked
 //! 32³ field shared by all). The `voxels` rows put one `VoxelAoVolume` around the room (plus
-//! extra balls for the triangle-count rows) with the image-space term off: `voxelize` is the
+//! extra balls for the triangle-count rows) with the image-space term off, tracing the row's rays
+//! every frame (its `accumulated_rays` too; the `near + voxels` rows keep the volume's defaults,
+//! 8 rays a frame under the camera's accumulation): `voxelize` is the
 //! per-frame grid build, `voxel AO` the sampling of the half-resolution map, `voxel temporal` its
 //! accumulation over frames (where the camera accumulates), `voxel filter` its upsampling and
 //! blur. On lavapipe the voxelize dispatch's timestamps do not capture its work
@@ -529,7 +531,9 @@ fn spawn_scene(world: &mut World, config: &Config, size: UVec2) {
             VoxelAoVolume {
                 half_extents: Vec3::new(4.0, 1.5, 2.5),
                 resolution: run.resolution,
+                // The row's rays every frame, accumulated or not.
                 rays: run.rays,
+                accumulated_rays: run.rays,
                 march: if run.steps == 0 {
                     VoxelMarch::Cells
                 } else {

@@ -151,6 +151,10 @@ fn every_documented_default_is_the_real_one() {
         ),
         ("VoxelAoVolume::DEFAULT_RAYS", &VoxelAoVolume::DEFAULT_RAYS),
         (
+            "VoxelAoVolume::DEFAULT_ACCUMULATED_RAYS",
+            &VoxelAoVolume::DEFAULT_ACCUMULATED_RAYS,
+        ),
+        (
             "VoxelAoVolume::DEFAULT_SPREAD",
             &VoxelAoVolume::DEFAULT_SPREAD,
         ),

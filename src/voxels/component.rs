@@ -21,7 +21,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// ([`VoxelFalloff::Wendland`]) and a reach of its own (`d_max`).
 ///
 /// Defaults follow the paper's table 1 where they do not change what is measured (256³ voxels,
-/// 32 rays). Several volumes may exist; where they overlap, a surface takes the darkest of their
+/// 32 rays; 8 a frame where the camera accumulates). Several volumes may exist; where they overlap, a surface takes the darkest of their
 /// answers.
 ///
 /// `RenderLayers`: a camera samples the volume when it shares a layer with the volume's entity,
@@ -61,6 +61,12 @@ pub struct VoxelAoVolume {
     /// Rays per pixel of the AO map. Clamped into 1..=[`Self::MAX_RAYS`].
     /// Default: [`VoxelAoVolume::DEFAULT_RAYS`] (32).
     pub rays: u32,
+    /// Rays per pixel each frame on a camera that accumulates the voxel term
+    /// ([`AoTemporal`](crate::AoTemporal) on, as by default): the history averages the frames'
+    /// turned patterns, so fewer rays a frame converge to what `rays` rays give. At most `rays`;
+    /// clamped into 1..=[`Self::MAX_RAYS`].
+    /// Default: [`VoxelAoVolume::DEFAULT_ACCUMULATED_RAYS`] (8).
+    pub accumulated_rays: u32,
     /// How a ray looks for occupied cells. Default: [`VoxelMarch::Cells`], every cell it
     /// crosses.
     pub march: VoxelMarch,
@@ -133,6 +139,10 @@ impl VoxelAoVolume {
     pub const DEFAULT_RESOLUTION: u32 = 256;
     /// Default rays per pixel (table 1).
     pub const DEFAULT_RAYS: u32 = 32;
+    /// Default rays per pixel each frame under accumulation: a quarter of table 1's, which
+    /// converge to the same error at a quarter of the cost (BENCHMARKS.md, "Fewer voxel rays a
+    /// frame under accumulation").
+    pub const DEFAULT_ACCUMULATED_RAYS: u32 = 8;
     /// Steps per ray of the paper's table 1, for [`VoxelMarch::Steps`].
     pub const PAPER_STEPS: u32 = 8;
     /// Default spread: the whole hemisphere.
@@ -173,6 +183,9 @@ impl VoxelAoVolume {
             Self::MAX_RESOLUTION,
         );
         let rays = clamp("rays", self.rays, 1, Self::MAX_RAYS);
+        // More a frame than without accumulation is no fault: `rays` caps it.
+        let accumulated_rays =
+            clamp("accumulated_rays", self.accumulated_rays, 1, Self::MAX_RAYS).min(rays);
         let march = match self.march {
             VoxelMarch::Cells => VoxelMarch::Cells,
             VoxelMarch::Steps(steps) => {
@@ -203,6 +216,7 @@ impl VoxelAoVolume {
                 half_extents: h,
                 resolution,
                 rays,
+                accumulated_rays,
                 march,
                 spread,
                 d_max,
@@ -219,6 +233,7 @@ impl Default for VoxelAoVolume {
             half_extents: Self::DEFAULT_HALF_EXTENTS,
             resolution: Self::DEFAULT_RESOLUTION,
             rays: Self::DEFAULT_RAYS,
+            accumulated_rays: Self::DEFAULT_ACCUMULATED_RAYS,
             march: VoxelMarch::Cells,
             spread: Self::DEFAULT_SPREAD,
             d_max: None,
@@ -296,6 +311,8 @@ impl VoxelGridInfo {
 pub struct VoxelRays {
     /// Rays per pixel.
     pub rays: u32,
+    /// Rays per pixel each frame on a camera that accumulates the voxel term; at most `rays`.
+    pub accumulated_rays: u32,
     /// How each ray looks for occupied cells.
     pub march: VoxelMarch,
     /// Cosine of the half-angle of the cone the rays fill.
@@ -324,6 +341,7 @@ impl VoxelRays {
         );
         Self {
             rays: volume.rays,
+            accumulated_rays: volume.accumulated_rays,
             march: volume.march,
             cos_spread: (volume.spread * std::f32::consts::FRAC_PI_2).cos().max(0.0),
             d_max: volume.d_max,
@@ -363,3 +381,29 @@ pub struct NotVoxelOccluder;
 #[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq)]
 #[reflect(Component, Default, Clone, Debug)]
 pub struct ShowOccupiedVoxels;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_rays_a_frame_under_accumulation_are_at_most_the_volumes_rays() {
+        let (volume, fixes) = VoxelAoVolume::default().sanitized().unwrap();
+        assert_eq!((volume.rays, volume.accumulated_rays), (32, 8));
+        assert!(fixes.is_empty());
+        let few = VoxelAoVolume {
+            rays: 4,
+            ..VoxelAoVolume::default()
+        };
+        let (volume, fixes) = few.sanitized().unwrap();
+        assert_eq!(volume.accumulated_rays, 4);
+        assert!(fixes.is_empty(), "capping at `rays` is no fault: {fixes:?}");
+        let none = VoxelAoVolume {
+            accumulated_rays: 0,
+            ..VoxelAoVolume::default()
+        };
+        let (volume, fixes) = none.sanitized().unwrap();
+        assert_eq!(volume.accumulated_rays, 1);
+        assert_eq!(fixes, ["accumulated_rays 0 is outside 1..=256; using 1"]);
+    }
+}

@@ -46,7 +46,9 @@ pub(crate) struct GpuVolume {
     /// The volume's `RenderLayers` as bits (see `view::layer_bits`): views on none of them do
     /// not sample it.
     pub layers: [u32; 2],
-    pub _padding: [u32; 2],
+    /// Rays per pixel on views that accumulate the voxel term; at most `rays`.
+    pub accumulated_rays: u32,
+    pub _padding: u32,
 }
 
 impl GpuVolume {
@@ -89,7 +91,8 @@ impl GpuVolume {
                 cell: rays.cell.to_array(),
                 flags: u32::from(show) | (u32::from(rays.falloff == VoxelFalloff::None) << 1),
                 layers: [1, 0],
-                _padding: [0; 2],
+                accumulated_rays: rays.accumulated_rays,
+                _padding: 0,
             },
             grid_from_world,
             rays,

@@ -2,7 +2,7 @@
 // and 4), one value per pixel of a half-resolution AO map. Each pixel traces `rays` rays over its
 // hemisphere (a cone of `spread`), jittered by a hash of its world-space position so the pattern
 // sticks to surfaces when the camera moves (and turned every frame under temporal accumulation,
-// whose pass follows this one). A ray is blocked once it has crossed most of a cell's width of
+// whose pass follows this one, where it traces `accumulated_rays`). A ray is blocked once it has crossed most of a cell's width of
 // occupied cells closer than the reach (the camera's radius R unless the volume sets d_max):
 // by default found by walking every cell the ray crosses, or, as the paper does, at the first of
 // `steps` evenly spaced tests that lands in one. A blocked ray counts with the cosine to the
@@ -147,8 +147,11 @@ fn volume_occlusion(volume: VoxelVolume, p: vec3<f32>, n: vec3<f32>) -> vec2<f32
     var cosines = 0.0;
     // Cosines of the rays blocked within the near field's reach, held or not.
     var near_blocked = 0.0;
-    for (var i = 0u; i < volume.rays; i++) {
-        let local = ray_direction(i, volume.rays, volume.cos_spread, j1, j2);
+    // A view that accumulates (frame index 0 where nothing does) averages each frame's turned
+    // pattern into its history, and traces the smaller budget.
+    let rays = select(volume.rays, volume.accumulated_rays, settings.frame_index != 0u);
+    for (var i = 0u; i < rays; i++) {
+        let local = ray_direction(i, rays, volume.cos_spread, j1, j2);
         let direction = frame * local;
         cosines += local.z;
         var t: f32;

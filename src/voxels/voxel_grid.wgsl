@@ -31,6 +31,8 @@ struct VoxelVolume {
     flags: u32,
     // The volume's RenderLayers as bits (`seen_by_view`).
     layers: vec2<u32>,
+    // Rays per pixel on views that accumulate the voxel term (at most `rays`).
+    accumulated_rays: u32,
 }
 
 // Counts of this frame's buffers, which may be longer; `voxels::render::VoxelParams`.

@@ -37,6 +37,7 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
         VoxelAoVolume {
             resolution: 0,
             rays: 0,
+            accumulated_rays: 0,
             march: VoxelMarch::Steps(0),
             spread: -1.0,
             d_max: Some(f32::NAN),
@@ -45,6 +46,7 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
         VoxelAoVolume {
             resolution: 100_000,
             rays: 100_000,
+            accumulated_rays: 100_000,
             march: VoxelMarch::Steps(100_000),
             spread: 7.0,
             d_max: Some(-3.0),
@@ -115,13 +117,16 @@ fn bad_volumes_are_skipped_or_clamped_without_a_panic() {
     );
     let rays = world.get::<VoxelGridInfo>(clamped[1]).unwrap().rays;
     assert_eq!(
-        (rays.rays, rays.march, rays.d_max),
+        (rays.rays, rays.accumulated_rays, rays.march, rays.d_max),
         (
+            VoxelAoVolume::MAX_RAYS,
             VoxelAoVolume::MAX_RAYS,
             VoxelMarch::Steps(VoxelAoVolume::MAX_STEPS),
             None
         )
     );
+    let fewest = world.get::<VoxelGridInfo>(clamped[0]).unwrap().rays;
+    assert_eq!((fewest.rays, fewest.accumulated_rays), (1, 1));
     assert!(frame.visibility.iter().all(|v| v.is_finite()));
     let mask = frame.geometry_mask();
     let mean = frame.visibility.iter().sum::<f32>() / frame.visibility.len() as f32;
