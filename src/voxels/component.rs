@@ -21,8 +21,8 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// ([`VoxelFalloff::Wendland`]) and a reach of its own (`d_max`).
 ///
 /// Defaults follow the paper's table 1 where they do not change what is measured (256³ voxels,
-/// 32 rays; 8 a frame where the camera accumulates). Several volumes may exist; where they overlap, a surface takes the darkest of their
-/// answers.
+/// 32 rays; 8 a frame where the camera accumulates). Several volumes may exist; where they
+/// overlap, a surface takes the darkest of their answers.
 ///
 /// `RenderLayers`: a camera samples the volume when it shares a layer with the volume's entity,
 /// and a mesh is voxelized into the volume only when it is on every layer of the volume (without
