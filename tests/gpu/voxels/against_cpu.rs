@@ -42,6 +42,31 @@ fn cpu_voxel_visibility(
     filtered.iter().map(|o| 1.0 - o.clamp(0.0, 1.0)).collect()
 }
 
+/// A volume of 96³ cells over the room corner tracing `rays` (`accumulated_rays` a frame under
+/// accumulation), two frames after it was spawned.
+fn corner_volume(gpu: &mut Gpu, rays: u32, accumulated_rays: u32) -> Entity {
+    let volume = spawn_volume(
+        gpu,
+        Transform::from_xyz(-0.5, 1.0, -0.5),
+        VoxelAoVolume {
+            half_extents: Vec3::new(2.0, 1.3, 2.0),
+            resolution: 96,
+            rays,
+            accumulated_rays,
+            ..default()
+        },
+    );
+    gpu.update(2);
+    volume
+}
+
+/// The CPU evaluation of `volume`'s grid with 64 rays at `frame`, seen by a camera with `ao`.
+fn with_many_rays(gpu: &mut Gpu, volume: Entity, frame: &Frame, ao: &DynamicAo) -> Vec<f32> {
+    let mut grids = read_grids(gpu, &[volume]);
+    grids[0].0.rays.rays = 64;
+    cpu_voxel_visibility(frame, &grids, ao)
+}
+
 #[test]
 fn gpu_voxel_ao_matches_the_cpu_evaluation_of_the_same_rays() {
     let scene = scenes::room_corner();
@@ -95,21 +120,9 @@ fn the_voxel_term_accumulates_toward_many_rays() {
         ..voxels_only()
     };
     let mut gpu = Gpu::new(&scene, ao(AoTemporal::OFF));
-    let volume = spawn_volume(
-        &mut gpu,
-        Transform::from_xyz(-0.5, 1.0, -0.5),
-        VoxelAoVolume {
-            half_extents: Vec3::new(2.0, 1.3, 2.0),
-            resolution: 96,
-            rays: 4,
-            ..default()
-        },
-    );
-    gpu.update(2);
+    let volume = corner_volume(&mut gpu, 4, 4);
     let single = gpu.frame(2);
-    let mut grids = read_grids(&mut gpu, &[volume]);
-    grids[0].0.rays.rays = 64;
-    let many = cpu_voxel_visibility(&single, &grids, &ao(AoTemporal::OFF));
+    let many = with_many_rays(&mut gpu, volume, &single, &ao(AoTemporal::OFF));
     let mask = single.geometry_mask();
     let error_single = rmse(&single.visibility, &many, Some(&mask));
 
@@ -152,26 +165,13 @@ fn an_accumulating_camera_traces_the_accumulated_rays_each_frame() {
         ..voxels_only()
     };
     let mut gpu = Gpu::new(&scene, ao.clone());
-    let volume = spawn_volume(
-        &mut gpu,
-        Transform::from_xyz(-0.5, 1.0, -0.5),
-        VoxelAoVolume {
-            half_extents: Vec3::new(2.0, 1.3, 2.0),
-            resolution: 96,
-            rays: 32,
-            accumulated_rays: 4,
-            ..default()
-        },
-    );
-    gpu.update(2);
+    let volume = corner_volume(&mut gpu, 32, 4);
     let four = gpu.frame(2);
-    let mut grids = read_grids(&mut gpu, &[volume]);
-    grids[0].0.rays.rays = 64;
     let still = DynamicAo {
         temporal: AoTemporal::OFF,
         ..ao
     };
-    let many = cpu_voxel_visibility(&four, &grids, &still);
+    let many = with_many_rays(&mut gpu, volume, &four, &still);
     let mask = four.geometry_mask();
     let error = |frame: &Frame| rmse(&frame.visibility, &many, Some(&mask));
     let error_four = error(&four);
