@@ -30,8 +30,8 @@
 //!    [`temporal`](crate::temporal)): with 4 rays per pixel, the RMSE against 64 rays on the CPU
 //!    falls from 0.068 in one frame to 0.011. So a camera that accumulates traces
 //!    [`accumulated_rays`](VoxelAoVolume::accumulated_rays) a frame (8 by default, a quarter of
-//!    `rays`): the pass costs a quarter, and the converged error is the same. Its blur keeps its full radius then: what is
-//!    left of its error is mostly the grid's steps, which frames do not average away. Rays start one cell diagonal off the surface, so they never test
+//!    `rays`): the pass costs a quarter, and the converged error is the same. Its blur keeps its
+//!    full radius then: what is left of its error is mostly the grid's steps, which frames do not average away. Rays start one cell diagonal off the surface, so they never test
 //!    the cells the surface itself occupies. Eq. 4 is normalized by the sum of the rays' cosines
 //!    (as printed, a fully enclosed surface would read ½). Departures, to measure what ground
 //!    truth measures:

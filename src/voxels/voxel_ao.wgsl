@@ -2,8 +2,8 @@
 // and 4), one value per pixel of a half-resolution AO map. Each pixel traces `rays` rays over its
 // hemisphere (a cone of `spread`), jittered by a hash of its world-space position so the pattern
 // sticks to surfaces when the camera moves (and turned every frame under temporal accumulation,
-// whose pass follows this one, where it traces `accumulated_rays`). A ray is blocked once it has crossed most of a cell's width of
-// occupied cells closer than the reach (the camera's radius R unless the volume sets d_max):
+// whose pass follows this one, where it traces `accumulated_rays`). A ray is blocked once it has
+// crossed most of a cell's width of occupied cells closer than the reach (the camera's radius R unless the volume sets d_max):
 // by default found by walking every cell the ray crosses, or, as the paper does, at the first of
 // `steps` evenly spaced tests that lands in one. A blocked ray counts with the cosine to the
 // normal, fully (what ground truth measures) or with Wendland's weight of its distance (eq. 3).
