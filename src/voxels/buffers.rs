@@ -15,7 +15,7 @@ use bytemuck::Zeroable;
 use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
 
-use super::component::{VoxelGridReadback, grid_words};
+use super::component::{BRICK_CELLS, VoxelGridReadback, brick_words, grid_words};
 use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
 
 /// Counts of this frame's buffers (`VoxelParams` in `voxel_grid.wgsl`).
@@ -25,6 +25,8 @@ pub(crate) struct VoxelParams {
     pub volumes: u32,
     /// First word of the interior bits: the surface bits of every volume come first.
     pub solid_offset: u32,
+    /// First word of the coarse occupancy bits, which follow every volume's interior bits.
+    pub brick_offset: u32,
 }
 
 /// This frame's voxel data on the GPU.
@@ -35,8 +37,10 @@ pub(crate) struct VoxelBuffers {
     pub(super) params: UniformBuffer<VoxelParams>,
     /// The bit grids of all volumes, back to back; grows, never shrinks.
     pub(super) grid: Option<Buffer>,
-    /// 32-bit words of `grid` in use this frame: surface and interior bits.
+    /// 32-bit words of `grid` in use this frame for surface and interior bits.
     pub words: u32,
+    /// 32-bit words of the coarse occupancy bits after them.
+    pub brick_words: u32,
     pub counts: VoxelParams,
     /// The storage buffer asset [`VoxelGridReadback`] names, if any.
     readback_request: Option<Handle<ShaderBuffer>>,
@@ -55,6 +59,7 @@ impl Default for VoxelBuffers {
             params: UniformBuffer::default(),
             grid: None,
             words: 0,
+            brick_words: 0,
             counts: VoxelParams::default(),
             readback_request: None,
             readback: None,
@@ -74,6 +79,22 @@ impl VoxelBuffers {
         self.volumes.values()[..self.counts.volumes as usize]
             .iter()
             .map(|v| v.resolution)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Invocations `mark_bricks` (`voxelize.wgsl`) needs for the volume that needs the most: one
+    /// per word's width of bricks where rows of cells fill whole words, else one per brick.
+    pub fn brick_marking_invocations(&self) -> u32 {
+        self.volumes.values()[..self.counts.volumes as usize]
+            .iter()
+            .map(|v| {
+                let bricks = v.resolution.div_ceil(BRICK_CELLS);
+                match v.resolution % 32 {
+                    0 => v.resolution / 32 * bricks * bricks,
+                    _ => bricks.pow(3),
+                }
+            })
             .max()
             .unwrap_or(0)
     }
@@ -125,7 +146,7 @@ pub(crate) fn write_voxel_buffers(
 ) {
     let buffers = buffers.as_mut();
     let max_bytes = device.limits().max_storage_buffer_binding_size;
-    let (kept, words) = volumes_that_fit(buffers.volumes.values(), max_bytes);
+    let (kept, words, bricks) = volumes_that_fit(buffers.volumes.values(), max_bytes);
     let total = buffers.volumes.len();
     if kept < total && !warned.0 {
         warned.0 = true;
@@ -141,6 +162,7 @@ pub(crate) fn write_voxel_buffers(
         triangles: buffers.triangles.len() as u32,
         volumes: kept as u32,
         solid_offset: words as u32,
+        brick_offset: words as u32 * 2,
     };
     if kept < total {
         // Triangles of dropped volumes would index past the kept ones.
@@ -168,6 +190,7 @@ pub(crate) fn write_voxel_buffers(
         buffers.counts.triangles = kept_triangles as u32;
     }
     buffers.words = words as u32 * 2;
+    buffers.brick_words = bricks as u32;
     // Bindings need a buffer even when there is nothing to bind; nothing reads these entries.
     if buffers.triangles.is_empty() {
         buffers.triangles.push(GridTriangle::zeroed());
@@ -179,7 +202,7 @@ pub(crate) fn write_voxel_buffers(
     buffers.volumes.write_buffer(&device, &queue);
     buffers.params.set(buffers.counts);
     buffers.params.write_buffer(&device, &queue);
-    let needed = u64::from(buffers.words.max(1)) * 4;
+    let needed = u64::from((buffers.words + buffers.brick_words).max(1)) * 4;
     if buffers.grid.as_ref().is_none_or(|g| g.size() < needed) {
         buffers.grid = Some(device.create_buffer(&BufferDescriptor {
             label: Some("dynamic_ao_voxel_grid"),
@@ -221,21 +244,22 @@ pub(crate) fn write_voxel_buffers(
 }
 
 /// How many of `volumes`, in order, fit in one storage binding of `max_bytes` (each grid takes
-/// its words twice: surface bits and interior bits), and the words per layer they take. Volumes
-/// that do not fit are dropped, last first.
-fn volumes_that_fit(volumes: &[GpuVolume], max_bytes: u64) -> (usize, u64) {
-    let limit = max_bytes / 8;
-    let mut words = 0u64;
+/// its words twice, surface bits and interior bits, and its bricks' bits), the words per layer
+/// they take and the words of their bricks. Volumes that do not fit are dropped, last first.
+fn volumes_that_fit(volumes: &[GpuVolume], max_bytes: u64) -> (usize, u64, u64) {
+    let limit = max_bytes / 4;
+    let (mut words, mut bricks) = (0u64, 0u64);
     let mut kept = 0;
     for volume in volumes {
         let end = u64::from(volume.offset) + u64::from(grid_words(volume.resolution));
-        if end > limit {
+        let bricks_end = u64::from(volume.brick_offset) + u64::from(brick_words(volume.resolution));
+        if 2 * end + bricks_end > limit {
             break;
         }
-        words = end;
+        (words, bricks) = (end, bricks_end);
         kept += 1;
     }
-    (kept, words)
+    (kept, words, bricks)
 }
 
 #[cfg(test)]
@@ -244,23 +268,27 @@ mod tests {
 
     #[test]
     fn volumes_past_the_binding_limit_are_dropped_last_first() {
-        // 512³ cells are 4 Mi words, 16 MiB per layer: four volumes fill 128 MiB.
+        // 512³ cells are 4 Mi words, 16 MiB per layer, and their 64³ bricks 8 Ki words
+        // (32 KiB): four volumes need 128 MiB and 128 KiB.
         let words = grid_words(512);
+        let bricks = brick_words(512);
+        assert_eq!((words, bricks), (4 << 20, 8 << 10));
         let volumes: Vec<GpuVolume> = (0..5)
             .map(|i| GpuVolume {
                 offset: i * words,
+                brick_offset: i * bricks,
                 resolution: 512,
                 ..Default::default()
             })
             .collect();
+        let fit = |n: u64| (n as usize, n * u64::from(words), n * u64::from(bricks));
         assert_eq!(
-            volumes_that_fit(&volumes, 128 << 20),
-            (4, 4 * u64::from(words))
+            volumes_that_fit(&volumes, (128 << 20) + (128 << 10)),
+            fit(4)
         );
-        assert_eq!(
-            volumes_that_fit(&volumes, 1 << 30),
-            (5, 5 * u64::from(words))
-        );
-        assert_eq!(volumes_that_fit(&volumes, 16 << 20), (0, 0));
+        // Without room for the fourth volume's bricks, it is dropped.
+        assert_eq!(volumes_that_fit(&volumes, 128 << 20), fit(3));
+        assert_eq!(volumes_that_fit(&volumes, 1 << 30), fit(5));
+        assert_eq!(volumes_that_fit(&volumes, 32 << 20), fit(0));
     }
 }

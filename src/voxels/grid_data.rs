@@ -48,16 +48,19 @@ pub(crate) struct GpuVolume {
     pub layers: [u32; 2],
     /// Rays per pixel on views that accumulate the voxel term; at most `rays`.
     pub accumulated_rays: u32,
-    pub _padding: u32,
+    /// First word of this volume's coarse occupancy bits, counted from the first of every
+    /// volume's (`VoxelParams::brick_offset`).
+    pub brick_offset: u32,
 }
 
 impl GpuVolume {
     /// The shader-side description of `volume` (already sanitized) placed by `world_from_volume`,
-    /// with its grid → world map, or `None` when that transform leaves no volume.
+    /// its grid at word `offset` and its bricks at `brick_offset`, with its grid → world map, or
+    /// `None` when that transform leaves no volume.
     pub(crate) fn new(
         volume: &VoxelAoVolume,
         world_from_volume: Affine3A,
-        offset: u32,
+        (offset, brick_offset): (u32, u32),
         show: bool,
     ) -> Option<(Self, Affine3A, VoxelRays)> {
         let n = volume.resolution as f32;
@@ -92,7 +95,7 @@ impl GpuVolume {
                 flags: u32::from(show) | (u32::from(rays.falloff == VoxelFalloff::None) << 1),
                 layers: [1, 0],
                 accumulated_rays: rays.accumulated_rays,
-                _padding: 0,
+                brick_offset,
             },
             grid_from_world,
             rays,

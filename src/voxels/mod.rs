@@ -23,6 +23,9 @@
 //!    (0.108 against 0.213 next to an off-screen box), with the fill 0.208. Meshes whose edges
 //!    are not all shared by exactly two triangles (planes, open shells) stay surface-only, and
 //!    where two closed meshes overlap, their common part reads as empty.
+//!
+//!    A third dispatch builds a coarse occupancy level: one bit per brick of 8³ cells, set where
+//!    any of its cells is occupied. Not in the paper, and it changes no hit (see step 3).
 //! 3. **Sample** (GPU, per view, §6): each pixel of a half-resolution AO map traces rays through
 //!    the grids; jitter comes from a hash of the pixel's world position, so it does not crawl
 //!    when the camera moves. Under [`AoTemporal`](crate::AoTemporal) the jitter also turns every
@@ -42,7 +45,11 @@
 //!      weights a hit at half the reach by 0.19 and found 0.022 of the 0.126 a ray tracer finds
 //!      next to a box just off-screen;
 //!    - a ray walks every cell it crosses ([`VoxelMarch::Cells`]): the paper's 8 evenly spaced
-//!      tests step over a floor one cell thick;
+//!      tests step over a floor one cell thick. Where its reach spans at least four bricks it
+//!      crosses a brick with no occupied cell in one step, so the cells it visits are those of
+//!      the walk without bricks less empty ones, and the hits are the same (the CPU twin walks
+//!      every cell): most of a ray's reach is air, and on lavapipe the pass takes 0.4–0.6× the
+//!      time at R = 0.75 m on a model on a floor at 256³, and 0.2–0.3× at 2 m;
 //!    - a ray is blocked once it has travelled [`VoxelAoVolume::HIT_DEPTH`] (0.9) cells through
 //!      occupied cells in a row, not at the first occupied cell it enters: conservative
 //!      voxelization grows every occluder by up to a cell, and a ray that only grazes that rim

@@ -51,14 +51,18 @@ pub(crate) fn voxel_pass(
     let diagnostics = diagnostics.as_deref();
 
     if buffers.needs_voxelizing
-        && let (Some(grid), Some(bind_group), Some(fill_interior)) = (
+        && let (Some(grid), Some(bind_group), Some(fill_interior), Some(mark_bricks)) = (
             buffers.grid(),
             &buffers.voxelize_bind_group,
             pipeline_cache.get_compute_pipeline(pipelines.fill_interior),
+            pipeline_cache.get_compute_pipeline(pipelines.mark_bricks),
         )
     {
-        ctx.command_encoder()
-            .clear_buffer(grid, 0, Some(u64::from(buffers.words) * 4));
+        ctx.command_encoder().clear_buffer(
+            grid,
+            0,
+            Some(u64::from(buffers.words + buffers.brick_words) * 4),
+        );
         let triangles = buffers.counts.triangles;
         if triangles > 0 {
             {
@@ -79,6 +83,10 @@ pub(crate) fn voxel_pass(
                 pass.set_pipeline(fill_interior);
                 let columns = buffers.largest_resolution().pow(2);
                 pass.dispatch_workgroups(columns.div_ceil(64), buffers.counts.volumes, 1);
+                // One row per volume (at most 64³ invocations, 4,096 workgroups, at 512³ cells).
+                pass.set_pipeline(mark_bricks);
+                let invocations = buffers.brick_marking_invocations();
+                pass.dispatch_workgroups(invocations.div_ceil(64), buffers.counts.volumes, 1);
                 pass_span.end(&mut pass);
             }
         }
@@ -186,6 +194,7 @@ pub(crate) fn wait_for_voxels(
     let ready = |id| pipeline_cache.get_compute_pipeline(id).is_some();
     let all_ready = ready(pipelines.voxelize)
         && ready(pipelines.fill_interior)
+        && ready(pipelines.mark_bricks)
         && ready(pipelines.sample)
         && blur.two.ready(&pipeline_cache);
     let temporal_ready = temporal.ready(&pipeline_cache, Channels::Pair);

@@ -33,6 +33,8 @@ pub(crate) struct VoxelPipelines {
     pub voxelize: CachedComputePipelineId,
     /// Carries the interior flips of closed meshes up their columns (`voxelize.wgsl`).
     pub fill_interior: CachedComputePipelineId,
+    /// Sets the bits of the bricks that hold an occupied cell (`voxelize.wgsl`).
+    pub mark_bricks: CachedComputePipelineId,
     pub sample: CachedComputePipelineId,
 }
 
@@ -80,6 +82,7 @@ impl FromWorld for VoxelPipelines {
         };
         let voxelize = voxelize_step("dynamic_ao_voxelize_pipeline", "voxelize");
         let fill_interior = voxelize_step("dynamic_ao_fill_interior_pipeline", "fill_interior");
+        let mark_bricks = voxelize_step("dynamic_ao_mark_bricks_pipeline", "mark_bricks");
         let sample = cache.queue_compute_pipeline(ComputePipelineDescriptor {
             label: Some("dynamic_ao_voxel_ao_pipeline".into()),
             layout: vec![sample_layout.clone()],
@@ -91,6 +94,7 @@ impl FromWorld for VoxelPipelines {
             sample_layout,
             voxelize,
             fill_interior,
+            mark_bricks,
             sample,
         }
     }

@@ -24,7 +24,7 @@ use bevy::prelude::{GlobalTransform, Name};
 
 use super::component::{
     NotVoxelOccluder, ShowOccupiedVoxels, VoxelAoVolume, VoxelGridInfo, VoxelVolumeError,
-    grid_words,
+    brick_words, grid_words,
 };
 use super::grid_data::{GpuVolume, GridTriangle, VoxelFrame};
 use super::mesh_cache::{VoxelMesh, VoxelMeshCache};
@@ -239,9 +239,10 @@ fn place_volumes(
     sorted.sort_by_key(|(entity, ..)| *entity);
     let mut active = Vec::new();
     let mut offset = 0u32;
+    let mut brick_offset = 0u32;
     for (entity, volume, transform, show, name, layers) in sorted {
         let placed = volume.sanitized().and_then(|(volume, fixes)| {
-            GpuVolume::new(&volume, transform.affine(), offset, show)
+            GpuVolume::new(&volume, transform.affine(), (offset, brick_offset), show)
                 .map(|gpu| (volume, fixes, gpu))
                 .ok_or(VoxelVolumeError::BadTransform)
         });
@@ -279,6 +280,7 @@ fn place_volumes(
         });
         gpu_volumes.push(gpu);
         offset += grid_words(volume.resolution);
+        brick_offset += brick_words(volume.resolution);
     }
     (active, offset)
 }

@@ -33,6 +33,8 @@ struct VoxelVolume {
     layers: vec2<u32>,
     // Rays per pixel on views that accumulate the voxel term (at most `rays`).
     accumulated_rays: u32,
+    // First word of the volume's brick bits, from `VoxelParams::brick_offset`.
+    brick_offset: u32,
 }
 
 // Counts of this frame's buffers, which may be longer; `voxels::render::VoxelParams`.
@@ -42,7 +44,13 @@ struct VoxelParams {
     // Where the interior bits start: the grid buffer holds every volume's surface bits, then
     // every volume's interior bits in the same layout.
     solid_offset: u32,
+    // Where the brick bits start, after the interior bits: one bit per brick of BRICK_CELLS³
+    // cells, set where any of its cells is occupied, bricks ordered as cells are.
+    brick_offset: u32,
 }
+
+// `voxels::component::BRICK_CELLS`.
+const BRICK_CELLS: u32 = 8u;
 
 const GOLDEN_RATIO_FRACTION: f32 = 0.618033988749895;
 
@@ -83,6 +91,11 @@ fn ray_direction(i: u32, count: u32, cos_spread: f32, j1: f32, j2: f32) -> vec3<
     let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
     let phi = TAU * fract(f32(i) * GOLDEN_RATIO_FRACTION + j2);
     return vec3<f32>(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+}
+
+// Bricks per axis of a grid.
+fn bricks_per_axis(volume: VoxelVolume) -> u32 {
+    return (volume.resolution + BRICK_CELLS - 1u) / BRICK_CELLS;
 }
 
 // Linear index of cell `c` in its grid, or −1 outside the grid.

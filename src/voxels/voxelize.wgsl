@@ -3,8 +3,11 @@
 // the axis its normal is closest to, and each cell the triangle's plane crosses in a column is
 // kept when the separating-axis test (Akenine-Möller 2001) finds triangle and cell overlapping.
 // The bit grid is cleared before the pass; `reference::voxels::voxelize` is the CPU twin.
+// `mark_bricks` then builds the coarse level the rays skip empty space with.
 
-#import bevy_dynamic_ao::voxel_grid::{VoxelParams, VoxelVolume, cell_index}
+#import bevy_dynamic_ao::voxel_grid::{
+    BRICK_CELLS, VoxelParams, VoxelVolume, bricks_per_axis, cell_index,
+}
 
 struct GridTriangle {
     // Grid space; a.w holds the volume index as bits, b.w is 1 for a triangle of a closed mesh.
@@ -152,6 +155,81 @@ fn fill_interior(@builtin(global_invocation_id) id: vec3<u32>) {
         parity ^= flipped;
         if parity != flipped {
             atomicXor(&grid[base + i / 32u], 1u << (i % 32u));
+        }
+    }
+}
+
+// Whether any of bits `first` ..= `last`, which lie in at most two words, is set in the grid
+// whose bits start at word `base`.
+fn any_bit(base: u32, first: u32, last: u32) -> bool {
+    let low = ~0u << (first % 32u);
+    let high = ~0u >> (31u - last % 32u);
+    let w0 = first / 32u;
+    let w1 = last / 32u;
+    if w0 == w1 {
+        return (atomicLoad(&grid[base + w0]) & low & high) != 0u;
+    }
+    return (atomicLoad(&grid[base + w0]) & low) != 0u || (atomicLoad(&grid[base + w1]) & high) != 0u;
+}
+
+// The coarse occupancy level, after `fill_interior`: a brick's bit is set where any of its cells
+// holds a surface or an interior bit. Invocation `id.x` of row `id.y` (a volume) takes, where
+// rows of cells fill whole words (resolution a multiple of 32), the BRICK_CELLS² words of a
+// word's width of bricks (32 / BRICK_CELLS of them, whose bits lie in one word of brick bits:
+// a quarter of the reads of a brick at a time); otherwise one brick, reading its rows a word or
+// two at a time.
+@compute @workgroup_size(64, 1, 1)
+fn mark_bricks(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.y >= params.volumes {
+        return;
+    }
+    let volume = volumes[id.y];
+    let n = volume.resolution;
+    let bricks = bricks_per_axis(volume);
+    let brick_base = params.brick_offset + volume.brick_offset;
+    if n % 32u == 0u {
+        let words = n / 32u;
+        if id.x >= words * bricks * bricks {
+            return;
+        }
+        let word = id.x % words;
+        let by = (id.x / words) % bricks;
+        let bz = id.x / (words * bricks);
+        var bits = 0u;
+        for (var z = bz * BRICK_CELLS; z < (bz + 1u) * BRICK_CELLS; z++) {
+            for (var y = by * BRICK_CELLS; y < (by + 1u) * BRICK_CELLS; y++) {
+                let w = word + words * (y + n * z);
+                bits |= atomicLoad(&grid[volume.offset + w]);
+                bits |= atomicLoad(&grid[params.solid_offset + volume.offset + w]);
+            }
+        }
+        var mask = 0u;
+        for (var k = 0u; k < 32u / BRICK_CELLS; k++) {
+            let run = (bits >> (k * BRICK_CELLS)) & ((1u << BRICK_CELLS) - 1u);
+            mask |= select(0u, 1u << k, run != 0u);
+        }
+        // The word's bricks are consecutive in one word of brick bits: `bricks` is a multiple of
+        // 32 / BRICK_CELLS.
+        let first = word * (32u / BRICK_CELLS) + bricks * (by + bricks * bz);
+        if mask != 0u {
+            atomicOr(&grid[brick_base + first / 32u], mask << (first % 32u));
+        }
+        return;
+    }
+    if id.x >= bricks * bricks * bricks {
+        return;
+    }
+    let lo = vec3<u32>(id.x % bricks, (id.x / bricks) % bricks, id.x / (bricks * bricks)) * BRICK_CELLS;
+    let hi = min(lo + BRICK_CELLS, vec3<u32>(n));
+    for (var z = lo.z; z < hi.z; z++) {
+        for (var y = lo.y; y < hi.y; y++) {
+            let first = lo.x + n * (y + n * z);
+            let last = first + hi.x - lo.x - 1u;
+            if any_bit(volume.offset, first, last)
+                || any_bit(params.solid_offset + volume.offset, first, last) {
+                atomicOr(&grid[brick_base + id.x / 32u], 1u << (id.x % 32u));
+                return;
+            }
         }
     }
 }
