@@ -387,3 +387,29 @@ pub fn proxies_on_floor(proxies: &[OccluderSphere], p: Vec3, reach: f32) -> [f32
         sphere_union([0.0, 1.0 - open], open, largest)[1],
     ]
 }
+
+/// Scenes for the voxel term as a user sets them up, each with the folder its model loads from:
+/// the room corner, a box and a wall just off-screen, the walker on a floor, and where
+/// `../shared/assets` is present CesiumMan and the CornellBox on a floor and CesiumMan just
+/// outside the view.
+pub fn voxel_scenes() -> Vec<(FarScene, Option<String>)> {
+    let mut scenes: Vec<(FarScene, Option<String>)> = procedural()
+        .into_iter()
+        .filter(|s| ["room corner", "box beside view", "wall beside view"].contains(&s.name))
+        .map(|s| (s, None))
+        .collect();
+    scenes.push((walker_on_floor(), None));
+    if let Some(shared) = crate::models::shared_assets() {
+        let wanted = [
+            "CesiumMan on floor",
+            "CornellBox on floor",
+            "CesiumMan beside view",
+        ];
+        for scene in third_party() {
+            if wanted.contains(&scene.name) {
+                scenes.push((scene, shared.to_str().map(str::to_owned)));
+            }
+        }
+    }
+    scenes
+}

@@ -390,24 +390,7 @@ fn the_accumulated_voxel_term_holds_on_scenes_with_every_mesh_an_occluder() {
     use crate::far_scenes::{self, FarRun};
     use crate::far_terms::FarTerm;
 
-    let mut scenes: Vec<(far_scenes::FarScene, Option<String>)> = far_scenes::procedural()
-        .into_iter()
-        .filter(|s| ["room corner", "box beside view", "wall beside view"].contains(&s.name))
-        .map(|s| (s, None))
-        .collect();
-    scenes.push((far_scenes::walker_on_floor(), None));
-    if let Some(shared) = crate::models::shared_assets() {
-        let wanted = [
-            "CesiumMan on floor",
-            "CornellBox on floor",
-            "CesiumMan beside view",
-        ];
-        for scene in far_scenes::third_party() {
-            if wanted.contains(&scene.name) {
-                scenes.push((scene, shared.to_str().map(str::to_owned)));
-            }
-        }
-    }
+    let scenes = far_scenes::voxel_scenes();
     let voxels = |run: &mut FarRun, near: bool, image_space: DynamicAo, radius: f32| {
         run.image_space = image_space;
         run.render(

@@ -196,31 +196,17 @@ fn an_accumulating_camera_traces_the_accumulated_rays_each_frame() {
     );
 }
 
-/// Scenes as a user sets them up, every mesh in one volume placed as `ao_capture` places it
-/// (256³ over what occludes the view): the room corner, a box and a wall just off-screen, the
-/// walker and third-party models on a floor, at two radii. Where R spans four bricks the walk
-/// crosses empty ones in one step; the CPU twin walks every cell, so the two agree only if no
-/// occupied cell is skipped.
+/// Scenes as a user sets them up (`far_scenes::voxel_scenes`), every mesh in one volume placed
+/// as `ao_capture` places it (256³ over what occludes the view), at two radii. Where R spans
+/// four bricks the walk crosses empty ones in one step; the CPU twin walks every cell, so the
+/// two agree only if no occupied cell is skipped.
 #[test]
 fn the_brick_walk_matches_the_cpu_on_scenes_with_every_mesh_an_occluder() {
     use crate::far_scenes::{self, FarRun};
     use crate::far_terms::FarTerm;
 
-    let mut scenes: Vec<(far_scenes::FarScene, Option<String>)> = far_scenes::procedural()
-        .into_iter()
-        .filter(|s| ["room corner", "box beside view", "wall beside view"].contains(&s.name))
-        .map(|s| (s, None))
-        .collect();
-    scenes.push((far_scenes::walker_on_floor(), None));
-    if let Some(shared) = crate::models::shared_assets() {
-        for scene in far_scenes::third_party() {
-            if ["CesiumMan on floor", "CornellBox on floor"].contains(&scene.name) {
-                scenes.push((scene, shared.to_str().map(str::to_owned)));
-            }
-        }
-    }
     let mut bricked = 0;
-    for (scene, folder) in scenes {
+    for (scene, folder) in far_scenes::voxel_scenes() {
         let name = scene.name;
         let mut run = FarRun::new(&scene, folder.as_deref());
         for radius in [0.75, 2.0] {
@@ -239,18 +225,19 @@ fn the_brick_walk_matches_the_cpu_on_scenes_with_every_mesh_an_occluder() {
             let cpu = cpu_voxel_visibility(&frame, &grids, &plain_ao().with_radius(radius));
             let mask = frame.geometry_mask();
             let (mean, p99) = difference_stats(&frame.visibility, &cpu, &mask);
-            let occlusion = mask
+            // The darkest pixel: an occluder off-screen darkens only a strip (CesiumMan beside
+            // the view, at 0.75 m, by 0.043 at most).
+            let darkest = mask
                 .iter()
                 .zip(&cpu)
                 .filter(|(m, _)| **m)
                 .map(|(_, v)| 1.0 - v)
-                .sum::<f32>()
-                / mask.iter().filter(|m| **m).count().max(1) as f32;
+                .fold(0.0, f32::max);
             println!(
-                "{name}, R = {radius} m: reach {bricks:.1} bricks; mean occlusion {occlusion:.3}; \
+                "{name}, R = {radius} m: reach {bricks:.1} bricks; darkest occlusion {darkest:.3}; \
                  GPU vs CPU mean |diff| {mean:.5}, 99th percentile {p99:.5}"
             );
-            assert!(occlusion > 0.01, "{name}: the volume casts occlusion");
+            assert!(darkest > 0.02, "{name}: the volume casts occlusion");
             // Measured: mean at most 0.00094 and 99th percentile 0.0106 (the room corner at
             // 2 m, whose walls meet cell boundaries along whole rows of pixels).
             assert!(
