@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example ao_capture -- --scene FILE.glb --width W --height H \
 //!     --radius R --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] \
-//!     [--accumulated-blur PIXELS] \
+//!     [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] \
 //!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] \
 //!     [--thickness F] [--full-back-faces] [--half-res] \
 //!     [--far-blend count-once|add|max] \

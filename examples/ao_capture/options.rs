@@ -11,7 +11,7 @@ use crate::common::{parse_between, parse_number};
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -91,6 +91,9 @@ pub struct Options {
     /// Half-width of the cross-bilateral blur under accumulation (`AoBlur::accumulated_radius`),
     /// pixels (0 = off).
     pub accumulated_blur: u32,
+    /// Half-width of the voxel term's blur under accumulation
+    /// (`AoBlur::voxel_accumulated_radius`), pixels (0 = off).
+    pub voxel_accumulated_blur: u32,
     /// Depth sharpness of the cross-bilateral blur (`AoBlur::sharpness`, no unit).
     pub blur_sharpness: f32,
     /// Normal sharpness of the cross-bilateral blur (`AoBlur::normal_sharpness`, no unit).
@@ -149,6 +152,7 @@ impl Options {
         let (mut preset, mut frames, mut time) = (AoPreset::default(), None, 0.0f32);
         let mut blur = AoBlur::default().radius;
         let mut accumulated_blur = AoBlur::default().accumulated_radius;
+        let mut voxel_accumulated_blur = AoBlur::default().voxel_accumulated_radius;
         let mut blur_sharpness = AoBlur::default().sharpness;
         let mut blur_normal_sharpness = AoBlur::default().normal_sharpness;
         let mut blur_detail = AoBlur::default().detail_reach;
@@ -227,6 +231,10 @@ impl Options {
                 "--blur" => blur = parse_between(&flag, &value()?, 0, AoBlur::MAX_RADIUS)?,
                 "--accumulated-blur" => {
                     accumulated_blur = parse_between(&flag, &value()?, 0, AoBlur::MAX_RADIUS)?;
+                }
+                "--voxel-accumulated-blur" => {
+                    voxel_accumulated_blur =
+                        parse_between(&flag, &value()?, 0, AoBlur::MAX_RADIUS)?;
                 }
                 "--blur-sharpness" => {
                     blur_sharpness = parse_number("--blur-sharpness", &value()?, 0.0f32)?;
@@ -324,6 +332,7 @@ impl Options {
             preset,
             blur,
             accumulated_blur,
+            voxel_accumulated_blur,
             blur_sharpness,
             blur_normal_sharpness,
             blur_detail,

@@ -116,6 +116,7 @@ fn scene_ready(
             blur: AoBlur {
                 radius: options.blur,
                 accumulated_radius: options.accumulated_blur,
+                voxel_accumulated_radius: options.voxel_accumulated_blur,
                 sharpness: options.blur_sharpness,
                 normal_sharpness: options.blur_normal_sharpness,
                 detail_reach: options.blur_detail,

@@ -240,6 +240,7 @@ pub(super) mod tests {
         let blur = |sharpness| AoBlur {
             radius: 8,
             accumulated_radius: 0,
+            voxel_accumulated_radius: 0,
             sharpness,
             normal_sharpness: 0.0,
             detail_reach: 0,

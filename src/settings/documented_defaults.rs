@@ -120,6 +120,10 @@ fn every_documented_default_is_the_real_one() {
             "DEFAULT_ACCUMULATED_BLUR_RADIUS",
             &DEFAULT_ACCUMULATED_BLUR_RADIUS,
         ),
+        (
+            "DEFAULT_VOXEL_ACCUMULATED_BLUR_RADIUS",
+            &DEFAULT_VOXEL_ACCUMULATED_BLUR_RADIUS,
+        ),
         ("DEFAULT_BLUR_SHARPNESS", &DEFAULT_BLUR_SHARPNESS),
         (
             "DEFAULT_BLUR_NORMAL_SHARPNESS",

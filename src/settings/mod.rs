@@ -12,6 +12,7 @@ pub use crate::fields::settings::FieldShading;
 pub use crate::filter::settings::{
     AoBlur, DEFAULT_ACCUMULATED_BLUR_RADIUS, DEFAULT_BLUR_DETAIL_REACH,
     DEFAULT_BLUR_NORMAL_SHARPNESS, DEFAULT_BLUR_RADIUS, DEFAULT_BLUR_SHARPNESS,
+    DEFAULT_VOXEL_ACCUMULATED_BLUR_RADIUS,
 };
 pub use crate::horizon::settings::{HorizonMode, HorizonParams};
 pub use crate::near_field::settings::{DEFAULT_MAX_SAMPLES, DEFAULT_MIN_SAMPLES, NearFieldParams};

@@ -94,6 +94,7 @@ fn bad_values_fall_back() {
     let blur = AoBlur {
         radius: 99,
         accumulated_radius: 99,
+        voxel_accumulated_radius: 99,
         sharpness: f32::NAN,
         normal_sharpness: -1.0,
         detail_reach: 99,
@@ -101,6 +102,7 @@ fn bad_values_fall_back() {
     .sanitized();
     assert_eq!(blur.radius, AoBlur::MAX_RADIUS);
     assert_eq!(blur.accumulated_radius, AoBlur::MAX_RADIUS);
+    assert_eq!(blur.voxel_accumulated_radius, AoBlur::MAX_RADIUS);
     assert_eq!(blur.detail_reach, AoBlur::MAX_DETAIL_REACH);
     assert_eq!(blur.sharpness, DEFAULT_BLUR_SHARPNESS);
     assert_eq!(blur.normal_sharpness, DEFAULT_BLUR_NORMAL_SHARPNESS);

@@ -86,9 +86,7 @@ pub(crate) struct DynamicAoUniform {
     /// Frames the temporal history averages, 1 without accumulation: the near field sizes its
     /// sample spheres for the whole accumulated budget.
     pub temporal_frames: f32,
-    /// Blur half-width of the voxel term, pixels (0 = off). Accumulation does not change it: the
-    /// voxel term's error is mostly the grid's steps, which frames do not average away (halved,
-    /// its error against ground truth rose from 0.024 to 0.029 on room corner at R = 2 m).
+    /// Blur half-width of the voxel term, pixels (0 = off; [`crate::AoBlur::voxel_radius`]).
     pub voxel_blur_radius: u32,
     /// Where the camera's viewport starts in its render target, pixels.
     pub viewport_origin: UVec2,
@@ -170,7 +168,7 @@ pub(super) fn extract_views(
         };
         let temporal = image_space && ao.temporal.enabled;
         let voxel_temporal = voxels && ao.temporal.enabled;
-        let voxel_blur_radius = blur.radius;
+        let voxel_blur_radius = blur.voxel_radius(voxel_temporal);
         // A viewport Bevy has not sized yet has no texture to run on; its size is checked again
         // where the textures are made.
         let viewport = camera.physical_viewport_size().unwrap_or_default();

@@ -226,25 +226,22 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 
 /// Each term joined to the crate's default image-space technique (the accumulated ray march) on
 /// characters standing on a floor, every mesh an occluder: never worse than the default alone at
-/// 0.75 m, but for the voxels (at most 5% worse), and at 2 m, where most of what occludes a
-/// character lies beyond the near field's reach, at least a tenth better, but for the voxels (at
-/// least 2%). At this size the default runs at full resolution (`DynamicAo::small_viewport_pixels`),
-/// which brought it alone closer to the truth than at half resolution and left the terms less to
-/// add. Measured: the walker 0.0222 alone at 0.75 m, 0.0207 / 0.0219 / 0.0214 joined (spheres /
-/// fields / voxels), at 2 m 0.0232 and 0.0199 / 0.0199 / 0.0225 (the voxels 0.97×); CesiumMan
-/// 0.0133 at 0.75 m, 0.0124 / 0.0134 / 0.0139 (the voxels 1.05×), at 2 m 0.0199 and 0.0129 /
-/// 0.0132 / 0.0194 (the voxels 0.97×). At half resolution the voxels
+/// 0.75 m (within 0.0005), and at 2 m, where most of what occludes a character lies beyond the
+/// near field's reach, at least a tenth better, but for the voxels (at least 7%). At this size
+/// the default runs at full resolution (`DynamicAo::small_viewport_pixels`), which brought it
+/// alone closer to the truth than at half resolution and left the terms less to add. Measured:
+/// the walker 0.0222 alone at 0.75 m, 0.0207 / 0.0219 / 0.0209 joined (spheres / fields /
+/// voxels), at 2 m 0.0232 and 0.0199 / 0.0199 / 0.0211 (the voxels 0.91×); CesiumMan 0.0133 at
+/// 0.75 m, 0.0124 / 0.0134 / 0.0134, at 2 m 0.0199 and 0.0129 / 0.0132 / 0.0170 (the voxels
+/// 0.85×). The accumulated voxel term blurs by one pixel (`AoBlur::voxel_accumulated_radius`);
+/// at the 4 pixels it kept before, the voxels read 0.0214 and 0.0225 (0.97×) on the walker and
+/// 0.0139 (1.05×) and 0.0194 (0.97×) on CesiumMan. At half resolution the voxels
 /// gained at least 5% at 2 m (the walker 0.0251 against the default's 0.0268, 0.94×, since a ray through a
 /// sheet towards the camera counts as blocked, which brought the default alone closer; 0.0251
 /// against 0.0275, 0.91×, and CesiumMan 0.0237 against 0.0262, 0.90×, since the default's rays'
-/// last step lies at R; under 0.9× before). Measured, the default
-/// converged over 64 frames: at 0.75 m the walker's error falls by 4% with spheres and 2% with
-/// fields and holds with voxels (0.0245 against 0.0245; it rose by 4% while the temporal clamp
-/// pulled a plane's edge toward the plane's inside, by 2% when this test took 60 frames),
-/// CesiumMan's falls by 3–8%; at 2 m they fall by 12–26% (the voxels 9–10% since the last step lies at R). Before the ray march counted steps
+/// last step lies at R; under 0.9× before). Before the ray march counted steps
 /// just behind the back-face layer as blocked the default alone was farther from the truth and
-/// the far field's share larger (7–19%, 11–15%, 27–44%); joined, CesiumMan's error has fallen
-/// since and the walker's risen by 8–10% (its limbs are closed solids with air between them). CesiumMan needs `../shared/assets`.
+/// the far field's share larger (7–19%, 11–15%, 27–44%). CesiumMan needs `../shared/assets`.
 #[test]
 fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
     let mut scenes = vec![(far_scenes::walker_on_floor(), None)];
@@ -268,13 +265,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             scene.name,
             "default",
             0.75,
-            |term, alone| {
-                if term == FarTerm::Voxels {
-                    1.05 * alone
-                } else {
-                    alone + 0.0005
-                }
-            },
+            |_, alone| alone + 0.0005,
         ));
         failed.extend(check_joined(
             &mut run,
@@ -284,7 +275,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             2.0,
             |term, alone| {
                 if term == FarTerm::Voxels {
-                    0.98 * alone
+                    0.93 * alone
                 } else {
                     0.9 * alone
                 }

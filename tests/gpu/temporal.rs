@@ -383,8 +383,9 @@ fn accumulation_works_with_bevys_temporal_anti_aliasing() {
 /// volume `ao_capture` places, a box and a wall just outside the view, the skinned walker and,
 /// where `../shared/assets` exists, third-party models on a floor (a skinned character, a room of
 /// thin walls, a character just off-screen), at 0.75 m and 2 m. Against ground truth, the voxel
-/// term alone accumulated must be no worse than one frame of it, and the default joined to it no
-/// worse than the near field joined to one frame of it by more than 0.004 (CornellBox: 0.015).
+/// term alone accumulated must be no worse than one frame of it (blurred by `AoBlur::radius`,
+/// where accumulated it is blurred by `voxel_accumulated_radius`) and lower over the scenes
+/// together, and the default joined to it no worse than the near field joined to one frame of it.
 #[test]
 fn the_accumulated_voxel_term_holds_on_scenes_with_every_mesh_an_occluder() {
     use crate::far_scenes::{self, FarRun};
@@ -407,6 +408,7 @@ fn the_accumulated_voxel_term_holds_on_scenes_with_every_mesh_an_occluder() {
         ..plain_ao()
     };
     let mut worse = Vec::new();
+    let (mut one_frame_sum, mut accumulated_sum) = (0.0, 0.0);
     for (scene, folder) in scenes {
         let name = scene.name;
         let mut run = FarRun::new(&scene, folder.as_deref());
@@ -424,24 +426,27 @@ fn the_accumulated_voxel_term_holds_on_scenes_with_every_mesh_an_occluder() {
                 error(&voxels(&mut run, true, plain_ao(), radius)),
                 error(&voxels(&mut run, true, DynamicAo::default(), radius)),
             );
+            one_frame_sum += alone.0;
+            accumulated_sum += alone.1;
             println!(
                 "{name}, R = {radius} m: voxels alone, one frame {:.4}, accumulated {:.4}; near \
                  field + voxels {:.4}, default + accumulated voxels {:.4}",
                 alone.0, alone.1, joined.0, joined.1
             );
-            // Measured: lower or within 0.0004 on every scene and radius.
+            // Measured: lower on every scene and radius but CesiumMan beside the view at 0.75 m
+            // (0.0020 against 0.0019), by 9–35% on those in view.
             assert!(
-                alone.1 <= alone.0 + 0.001,
+                alone.1 <= alone.0 + 0.0005,
                 "{name}, R = {radius} m: voxels accumulated {:.4} against one frame {:.4}",
                 alone.1,
                 alone.0
             );
-            // Measured: lower on every scene and radius (CesiumMan on a floor
-            // 0.0187 / 0.0235 against 0.0214 / 0.0242, CornellBox 0.0496 / 0.0402 against 0.0691
-            // / 0.0489). Before the ray march's last step lay at R, CesiumMan read +0.0027 /
+            // Measured: lower on every scene and radius but the wall beside the view at 0.75 m
+            // (0.0056 against 0.0056; CesiumMan on a floor 0.0131 / 0.0169 against 0.0214 /
+            // 0.0242, CornellBox 0.0339 / 0.0258 against 0.0691 / 0.0489). Before the ray march's last step lay at R, CesiumMan read +0.0027 /
             // +0.0024 (the near field's full resolution keeps the limbs' shading) and CornellBox,
             // a room of one-polygon walls, +0.006 / +0.014.
-            if joined.1 > joined.0 + 0.001 {
+            if joined.1 > joined.0 + 0.0003 {
                 worse.push(format!(
                     "{name}, R = {radius} m: default + voxels {:.4} against the near field {:.4}",
                     joined.1, joined.0
@@ -450,4 +455,11 @@ fn the_accumulated_voxel_term_holds_on_scenes_with_every_mesh_an_occluder() {
         }
     }
     assert!(worse.is_empty(), "{worse:?}");
+    // Measured: 0.75× with `../shared/assets`, 0.78× without. With the one-frame radius (4
+    // pixels) under accumulation too it read 0.96×, the characters within 0.0003 of one frame
+    // (the blur smeared what the turning rays had resolved), and the default joined to the
+    // voxels 0.0061 against the near field's 0.0056 beside the wall at 0.75 m.
+    let ratio = accumulated_sum / one_frame_sum;
+    println!("voxels alone, accumulated against one frame over every scene: {ratio:.3}×");
+    assert!(ratio < 0.8, "{ratio:.3}×");
 }

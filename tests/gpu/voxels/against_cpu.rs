@@ -33,10 +33,12 @@ fn cpu_voxel_visibility(
     let low = voxel_ao_map(&frame.nd, &frame.view, &volumes, &camera);
     let full = joint_bilateral_upsample_pair(&low, &frame.nd, &frame.view);
     let rest: Vec<f32> = full.iter().map(|[_, rest]| *rest).collect();
-    // The voxel term's blur weighs by depth alone.
+    // The voxel term's blur weighs by depth alone, at its own radius.
+    let sanitized = ao.blur.sanitized();
     let blur = AoBlur {
+        radius: sanitized.voxel_radius(ao.temporal.enabled),
         normal_sharpness: 0.0,
-        ..ao.blur.sanitized()
+        ..sanitized
     };
     let filtered = cross_bilateral_blur(&rest, &frame.nd, &frame.view, &blur);
     filtered.iter().map(|o| 1.0 - o.clamp(0.0, 1.0)).collect()
