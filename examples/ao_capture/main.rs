@@ -7,7 +7,7 @@
 //!     [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] \
 //!     [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] \
 //!     [--thickness F] [--full-back-faces] [--half-res] \
-//!     [--far-blend count-once|add|max] \
+//!     [--far-blend count-once|add|max] [--near-field-radius M] \
 //!     [--voxel-falloff none|wendland] [--frames N] \
 //!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
 //!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]

@@ -11,7 +11,7 @@ use crate::common::{parse_between, parse_number};
 pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
---technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] \
+--technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] [--near-field-radius M] \
 [--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
@@ -82,6 +82,9 @@ pub struct Options {
     pub far: Option<FarTerm>,
     /// How the far-field term joins the image-space one.
     pub far_blend: FarFieldBlend,
+    /// Reach of the image-space technique where a far-field term counts the rest
+    /// (`DynamicAo::near_field_radius`), metres.
+    pub near_field_radius: f32,
     /// Distance falloff of the voxel volume's hits.
     pub voxel_falloff: VoxelFalloff,
     /// The level of every technique's sample budget.
@@ -161,6 +164,7 @@ impl Options {
         let mut full_back_faces = false;
         let (mut default_technique, mut timings, mut temporal) = (false, false, None);
         let mut far_blend = FarFieldBlend::default();
+        let mut near_field_radius = DynamicAo::default().near_field_radius;
         let mut voxel_falloff = VoxelFalloff::default();
         let (mut out_ao, mut out_color, mut compare) = (None, None, None);
         let mut out_truth = None;
@@ -215,6 +219,16 @@ impl Options {
                     far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
                         "--far-blend takes count-once, add or max, got '{name}'"
                     ))?;
+                }
+                "--near-field-radius" => {
+                    let text = value()?;
+                    near_field_radius = text
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|r| r.is_finite() && *r > 0.0)
+                        .ok_or(format!(
+                            "--near-field-radius takes a positive number, got '{text}'"
+                        ))?;
                 }
                 "--voxel-falloff" => {
                     voxel_falloff = match value()?.as_str() {
@@ -328,6 +342,7 @@ impl Options {
             temporal: temporal.unwrap_or(preset.temporal()),
             far: technique.and_then(|(_, far)| far),
             far_blend,
+            near_field_radius,
             voxel_falloff,
             preset,
             blur,

@@ -138,6 +138,7 @@ fn scene_ready(
             fields: options.far == Some(FarTerm::Fields),
             voxels: options.far == Some(FarTerm::Voxels),
             far_field_blend: options.far_blend,
+            near_field_radius: options.near_field_radius,
             temporal: options.temporal,
             coarse_back_faces: !options.full_back_faces,
             // Every technique's budget at the chosen level.

@@ -131,6 +131,22 @@ fn bad_input_gives_a_one_line_error() {
         (
             [
                 base(&["--scene", scene]),
+                vec!["--near-field-radius".into(), "0".into()],
+            ]
+            .concat(),
+            "--near-field-radius takes a positive number",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
+                vec!["--voxel-accumulated-blur".into(), "17".into()],
+            ]
+            .concat(),
+            "--voxel-accumulated-blur takes a number from 0 to",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
                 vec!["--technique".into(), "magic".into()],
             ]
             .concat(),
