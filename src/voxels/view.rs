@@ -46,9 +46,15 @@ impl VoxelTextures {
         self.accumulated.as_ref().unwrap_or(&self.low)
     }
 
-    /// Whether the upsampled voxel occlusion is blurred on `view`.
+    /// Whether the upsampled voxel occlusion is blurred on `view`: by
+    /// [`AoBlur::voxel_radius`](crate::AoBlur::voxel_radius), which is the accumulated radius where
+    /// the view accumulates the voxel term.
     pub fn blurred(view: &DynamicAoView) -> bool {
-        view.settings.blur.sanitized().radius > 0
+        view.settings
+            .blur
+            .sanitized()
+            .voxel_radius(view.voxel_temporal)
+            > 0
     }
 }
 

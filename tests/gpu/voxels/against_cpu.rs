@@ -198,6 +198,60 @@ fn an_accumulating_camera_traces_the_accumulated_rays_each_frame() {
     );
 }
 
+/// A camera that accumulates the voxel term blurs it by `AoBlur::voxel_accumulated_radius`, not
+/// `radius`: the blurred image is the CPU blur (by depth alone) of the unblurred one, and the
+/// one-frame radius changes nothing. Each run is a fresh app, so the rays turn alike.
+#[test]
+fn an_accumulating_camera_blurs_the_voxel_term_by_its_accumulated_radius() {
+    let scene = scenes::room_corner();
+    let ao = |radius, voxel_accumulated_radius| DynamicAo {
+        blur: AoBlur {
+            radius,
+            voxel_accumulated_radius,
+            ..AoBlur::OFF
+        },
+        temporal: AoTemporal::ON,
+        ..voxels_only()
+    };
+    let run = |ao: DynamicAo| {
+        let mut gpu = Gpu::new(&scene, ao);
+        corner_volume(&mut gpu, 4, 4);
+        gpu.frame(8)
+    };
+    let unblurred = run(ao(0, 0));
+    let one_frame_radius = run(ao(4, 0));
+    let blurred = run(ao(0, 2));
+    let mask = unblurred.geometry_mask();
+    let (same_mean, same_p99) =
+        difference_stats(&unblurred.visibility, &one_frame_radius.visibility, &mask);
+    let occlusion: Vec<f32> = unblurred.visibility.iter().map(|v| 1.0 - v).collect();
+    let cpu_blur = AoBlur {
+        radius: 2,
+        normal_sharpness: 0.0,
+        ..AoBlur::default()
+    };
+    let cpu: Vec<f32> = cross_bilateral_blur(&occlusion, &unblurred.nd, &unblurred.view, &cpu_blur)
+        .iter()
+        .map(|o| 1.0 - o)
+        .collect();
+    let (mean, p99) = difference_stats(&blurred.visibility, &cpu, &mask);
+    let (moved, _) = difference_stats(&blurred.visibility, &unblurred.visibility, &mask);
+    println!(
+        "accumulated voxel term: `radius` 4 against 0, mean |diff| {same_mean:.5}; blurred by 2 \
+         against the CPU blur of the unblurred image {mean:.5} (99th percentile {p99:.5}), \
+         against the unblurred image {moved:.5}"
+    );
+    assert!(
+        same_mean == 0.0 && same_p99 == 0.0,
+        "{same_mean} {same_p99}"
+    );
+    assert!(moved > 0.002, "the blur changed nothing: {moved}");
+    assert!(
+        mean < 0.25 * moved && p99 < 0.01,
+        "{mean} {p99} (moved {moved})"
+    );
+}
+
 /// Scenes as a user sets them up (`far_scenes::voxel_scenes`), every mesh in one volume placed
 /// as `ao_capture` places it (256³ over what occludes the view), at two radii. Where R spans
 /// four bricks the walk crosses empty ones in one step; the CPU twin walks every cell, so the
