@@ -22,9 +22,9 @@ pub const DEFAULT_BLUR_DETAIL_REACH: u32 = 6;
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
 pub struct AoBlur {
-    /// Half-width of the kernel without temporal accumulation (the voxel term's too);
-    /// the kernel is `2 * radius + 1` pixels wide per pass and its Gaussian has σ = (radius +
-    /// 1) / 2. Units: pixels. Valid: 0 (off) ..= 16. Default: [`DEFAULT_BLUR_RADIUS`].
+    /// Half-width of the kernel without temporal accumulation (the voxel term's too, where it
+    /// does not accumulate); the kernel is `2 * radius + 1` pixels wide per pass and its Gaussian
+    /// has σ = (radius + 1) / 2. Units: pixels. Valid: 0 (off) ..= 16. Default: [`DEFAULT_BLUR_RADIUS`].
     pub radius: u32,
     /// Half-width of the image-space occlusion's kernel under temporal accumulation
     /// ([`AoTemporal`](crate::AoTemporal)). By default the blur does not run there: the history
@@ -38,9 +38,9 @@ pub struct AoBlur {
     /// frame, so the history averages their noise; what a blur still hides is the grid's steps,
     /// and at `radius` (4) it also smears the occlusion of a model's facets and creases. One
     /// pixel lowered the converged error against ground truth at R = 2 m (the Fox on a floor
-    /// 0.0261 → 0.0224, 160×120) and cost the filter 0.6× its time (BENCHMARKS.md, "The voxel
-    /// term's blur under accumulation"). Units: pixels. Valid: 0 (off) ..= 16. Default:
-    /// [`DEFAULT_VOXEL_ACCUMULATED_BLUR_RADIUS`].
+    /// 0.0261 → 0.0224, 160×120) and cost the filter 0.6× its time on lavapipe (BENCHMARKS.md,
+    /// "The voxel term's blur under accumulation"). Units: pixels. Valid: 0 (off) ..= 16.
+    /// Default: [`DEFAULT_VOXEL_ACCUMULATED_BLUR_RADIUS`].
     pub voxel_accumulated_radius: u32,
     /// How fast a sample's weight falls with its depth difference, relative to the centre
     /// pixel's depth: weight × exp(−(sharpness · Δz / z)²). 0 is a plain Gaussian. No unit.

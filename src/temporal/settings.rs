@@ -14,8 +14,7 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// values around the pixel is clamped toward it (no ghost trails). With it on, the image-space
 /// blur takes [`AoBlur::accumulated_radius`](crate::AoBlur::accumulated_radius), by default
 /// none (the voxel term's [`AoBlur::voxel_accumulated_radius`](crate::AoBlur::voxel_accumulated_radius),
-/// by default one pixel), and the ray march
-/// adds the fine-detail term itself, a side a frame.
+/// by default one pixel), and the ray march adds the fine-detail term itself, a side a frame.
 ///
 /// On by default: the default technique traces 2 rays per texel every other frame (its
 /// checkerboard) and relies on it to reach the error of many more (see [`AoPreset`](crate::AoPreset)). Turn it off for a static
