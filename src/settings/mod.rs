@@ -81,7 +81,7 @@ pub struct DynamicAo {
     /// measured lower error than 0.75 m on every scene of `cargo bench --bench far_field`, at
     /// R = 0.75 m and 2 m alike (0.35 m lower still on most, but not on characters in voxels).
     /// Joined to the default's ray march, voxel volumes of fine cells gain from a shorter reach
-    /// (0.25 m: lower on 16 of 20 rows, higher on models with detail finer than a cell), spheres
+    /// (0.25 m: lower on 15 of 20 rows, higher on models with detail finer than a cell), spheres
     /// and fields do not (BENCHMARKS.md, "The near field's reach joined to the voxels").
     /// With no far-field occluder in the scene, or another blend, the image-space technique
     /// reaches the whole `radius`. Give every mesh that should occlude beyond this
