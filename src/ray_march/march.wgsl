@@ -57,7 +57,8 @@ fn blocked(
         let back_z = -linear_depth(view, back);
         // Where the back face lies where the front one does (`TWO_SIDED_GAP`), the layer tells
         // nothing of what lies behind: the step is judged as where no back face was drawn.
-        if back_z - z < select(settings.ray_march_thickness, radius, two_sided(front_z, back_z)) {
+        let two_sided = abs(front_z - back_z) < TWO_SIDED_GAP * -front_z;
+        if back_z - z < select(settings.ray_march_thickness, radius, two_sided) {
             return 1;
         }
         // A sheet thinner than a step (a heat sink's fin): no step may land inside it, so a ray
@@ -157,61 +158,6 @@ fn facing_the_eye(m: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
 // The point at view-space depth `z` on the line of sight through view-space `p`.
 fn along_sight(p: vec3<f32>, z: f32, orthographic: bool) -> vec3<f32> {
     return vec3<f32>(p.xy * select(z / p.z, 1.0, orthographic), z);
-}
-
-// Whether the point at clip-space position `clip` lies behind the front layer.
-fn behind_the_front_layer(clip: vec4<f32>, size: vec2<f32>, dims: vec2<i32>) -> bool {
-    if clip.w <= 0.0 {
-        return false;
-    }
-    let ndc = clip.xyz / clip.w;
-    let q = vec2<i32>(floor(ndc_to_uv(ndc.xy) * size));
-    if any(q < vec2<i32>(0)) || any(q >= dims) {
-        return false;
-    }
-    return ndc.z < textureLoad(front_depth, q, 0);
-}
-
-// Whether the point at view-space depth `z` and clip-space position `clip` lies inside what the
-// layers surely bound: between them, or less than `radius` behind a front face with nothing
-// known behind it (no back face, or a two-sided sheet). Unlike `blocked`, a point behind a back
-// face counts as free: the thickness behind it and the thin-sheet rule both hold for a step
-// whose ray came from in front of that pixel's surface, and the middle of a stride between two
-// free steps may lie behind a character's leg that the ray passed beside (with them, and one
-// point a stride, CesiumMan on a floor at R = 2 m read 0.0274 against 0.0225 without the test,
-// and 0.0209 with this).
-fn inside_the_layers(
-    z: f32,
-    clip: vec4<f32>,
-    size: vec2<f32>,
-    dims: vec2<i32>,
-    radius: f32,
-) -> bool {
-    if clip.w <= 0.0 {
-        return false;
-    }
-    let ndc = clip.xyz / clip.w;
-    let q = vec2<i32>(floor(ndc_to_uv(ndc.xy) * size));
-    if any(q < vec2<i32>(0)) || any(q >= dims) {
-        return false;
-    }
-    let front = textureLoad(front_depth, q, 0);
-    if front <= 0.0 || ndc.z >= front {
-        return false;
-    }
-    let back = textureLoad(back_depth, q, 0);
-    if back > 0.0 && ndc.z > back {
-        return true;
-    }
-    let front_z = -linear_depth(view, front);
-    let open_behind = back <= 0.0 || two_sided(front_z, -linear_depth(view, back));
-    return open_behind && front_z - z < radius;
-}
-
-// Whether layers at view-space depths `front_z` and `back_z` hold the same polygon, a two-sided
-// sheet (`TWO_SIDED_GAP`).
-fn two_sided(front_z: f32, back_z: f32) -> bool {
-    return abs(front_z - back_z) < TWO_SIDED_GAP * -front_z;
 }
 
 // Whether the ray from view-space `origin` along unit `dir` (clip-space `clip` and `clip_dir`),
@@ -362,25 +308,12 @@ fn march(r: Receiver, sequence: u32) -> f32 {
         // (`came_through_from_behind`); `ray_march_steps` while there is none.
         var sheet = settings.ray_march_steps;
         var was_hidden = true;
-        // Where, metres along the ray, the first stride between two steps in front of the front
-        // layer lay behind it, at a third or two thirds of the stride (the test after the loop);
-        // −1 while none has.
-        var passed_at = -1.0;
-        var was_in_front = true;
         for (var s = 0u; s < settings.ray_march_steps; s++) {
             let at = step_at(s, settings.ray_march_steps, step_offset, step, radius);
             let t = at.x;
             let z = origin.z + dir.z * t;
             let previous_z = origin.z + dir.z * max(t - at.y, 0.0);
             let state = blocked(z, previous_z, at.y, clip + clip_dir * t, r.size, dims, radius);
-            let early = max(t - 2.0 / 3.0 * at.y, 0.0);
-            let late = max(t - 1.0 / 3.0 * at.y, 0.0);
-            let early_behind = behind_the_front_layer(clip + clip_dir * early, r.size, dims);
-            let late_behind = behind_the_front_layer(clip + clip_dir * late, r.size, dims);
-            let first = state == 2 && was_in_front && passed_at < 0.0;
-            let passed_here = first && (early_behind || late_behind);
-            passed_at = select(passed_at, select(late, early, early_behind), passed_here);
-            was_in_front = state == 2;
             sheet = select(sheet, s, state == 2 && was_hidden && sheet == settings.ray_march_steps);
             was_hidden = state == 0;
             if state == 1 || state == -1 {
@@ -404,20 +337,6 @@ fn march(r: Receiver, sequence: u32) -> f32 {
                 r.size,
             )) || (left_at >= 0.0
                 && beyond_the_edge(origin, dir, clip, clip_dir, on_screen, left_at, radius, r.size, dims));
-        }
-        // A wall thinner than a step (a room's wall of one polygon, seen from inside at R = 2 m:
-        // steps a third of a metre apart) can lie between two steps that both land in front of
-        // what the screen shows, one inside the room and the next outside it, beside the room's
-        // silhouette: the ray went through the wall unseen, and the room's inside read open.
-        // Between two such steps the ray passed behind the front layer where a point of the
-        // stride between them does (the march looks at a third and two thirds of each); such a
-        // point inside the layers blocks it. The first such stride only, tested after the loop
-        // as above. At 160×120 the CornellBox on a floor read RMSE 0.0449 → 0.0340 at R = 0.73 m
-        // and 0.1180 → 0.0714 at 2 m (0.0361 and 0.0846 from the stride's middle alone), the
-        // heat sink 0.0736 → 0.0658 at 2 m (BENCHMARKS.md, "Walls between two steps").
-        if !hit && passed_at >= 0.0 {
-            let z = origin.z + dir.z * passed_at;
-            hit = inside_the_layers(z, clip + clip_dir * passed_at, r.size, dims, radius);
         }
         hits += u32(hit);
     }

@@ -15,11 +15,7 @@
 //! shows, continued as its tangent plane: a floor or wall running out of the view still occludes
 //! what stands near the edge (a plate beside the edge read 0.26 of the truth's 0.40 occlusion
 //! without it, 0.37 with it; room corner's converged default 0.026 → 0.020 RMSE), for about a
-//! tenth of the AO passes' cost on lavapipe. Between two steps that both lie in front of the
-//! front layer the march looks at a third and two thirds of the stride: a wall thinner than a
-//! step (a room's wall of one polygon) that the ray went through blocks it (the CornellBox on a
-//! floor at R = 2 m, 160×120: RMSE 0.1180 → 0.0714, for 12–20% more of the AO passes' time on
-//! lavapipe; BENCHMARKS.md, "Walls between two steps"). The occlusion is the fraction of blocked rays: what
+//! tenth of the AO passes' cost on lavapipe. The occlusion is the fraction of blocked rays: what
 //! a ray tracer measures, for the geometry the two layers hold. Its error against ray-traced ground truth shrinks as the
 //! ray count grows; under temporal accumulation the rays' rotation, elevations and step offsets
 //! move every frame, so two rays per pixel and frame at half resolution converge to what many

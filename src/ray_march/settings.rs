@@ -6,9 +6,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// Occlusion"): `directions × elevations` cosine-weighted rays around the normal, each
 /// marched in `steps` steps of R / `steps` ([`DynamicAo::radius`](crate::DynamicAo::radius)), the last at R itself. A step is blocked
 /// where it lies behind the front layer and less than `thickness × R` behind the back-face
-/// layer (or, where no back face was drawn, less than R behind the front layer). Between two
-/// steps in front of the front layer, a ray whose stride's middle lies inside the layers went
-/// through a wall thinner than a step, and is blocked. Under temporal accumulation the rays'
+/// layer (or, where no back face was drawn, less than R behind the front layer). Under temporal accumulation the rays'
 /// rotation, elevations and step offsets move every frame, so the default 2 rays of 6 steps
 /// per frame add up to many more, and by default each frame marches half the texels
 /// ([`RayMarchParams::checkerboard`]); without it, give it [`RayMarchParams::REFERENCE`] or more.

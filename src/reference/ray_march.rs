@@ -72,7 +72,8 @@ fn blocked(
             return 1;
         }
         let back_z = view.view_position(q.x, q.y, w, h, back.depth).z;
-        let thickness = if two_sided(front_z, back_z) {
+        let two_sided = (front_z - back_z).abs() < TWO_SIDED_GAP * -front_z;
+        let thickness = if two_sided {
             inputs.radius
         } else {
             inputs.thickness
@@ -84,45 +85,6 @@ fn blocked(
         return i32::from(crossed);
     }
     i32::from(front_z - x.z < inputs.radius)
-}
-
-/// Whether view-space `x` lies behind the front layer: `behind_the_front_layer` in
-/// `march.wgsl`.
-fn behind_the_front_layer(nd: &NdBuffer, view: &ViewMatrices, x: Vec3) -> bool {
-    let Some((q, ndc_z)) = project(view, x, nd.width, nd.height) else {
-        return false;
-    };
-    nd.texel(false, q.x, q.y)
-        .is_some_and(|front| front.depth > 0.0 && ndc_z < front.depth)
-}
-
-/// Whether view-space `x` lies inside what the layers surely bound: between them, or less than
-/// R behind a front face with nothing known behind it: `inside_the_layers` in `march.wgsl`,
-/// which says why.
-fn inside_the_layers(nd: &NdBuffer, view: &ViewMatrices, x: Vec3, radius: f32) -> bool {
-    let (w, h) = (nd.width, nd.height);
-    let Some((q, ndc_z)) = project(view, x, w, h) else {
-        return false;
-    };
-    let (Some(front), Some(back)) = (nd.texel(false, q.x, q.y), nd.texel(true, q.x, q.y)) else {
-        return false;
-    };
-    if front.depth <= 0.0 || ndc_z >= front.depth {
-        return false;
-    }
-    if back.depth > 0.0 && ndc_z > back.depth {
-        return true;
-    }
-    let front_z = view.view_position(q.x, q.y, w, h, front.depth).z;
-    let open_behind =
-        back.depth <= 0.0 || two_sided(front_z, view.view_position(q.x, q.y, w, h, back.depth).z);
-    open_behind && front_z - x.z < radius
-}
-
-/// Whether layers at view-space depths `front_z` and `back_z` hold the same polygon, a two-sided
-/// sheet.
-fn two_sided(front_z: f32, back_z: f32) -> bool {
-    (front_z - back_z).abs() < TWO_SIDED_GAP * -front_z
 }
 
 /// How far, in view-space z, a ray's crossing of a sheet's plane may lie outside the sheet the
@@ -308,23 +270,10 @@ pub fn pixel_occlusion(
             let mut left_at = None;
             let mut hit = false;
             let mut was_hidden = true;
-            // The point of the first stride between two steps in front of the front layer that
-            // lies behind it, at a third or two thirds of the stride (`passed_at` in
-            // `march.wgsl`).
-            let mut passed_behind = None;
-            let mut was_in_front = true;
             for s in 0..inputs.steps {
                 let (t, stride) = step_at(s, inputs.steps, 0.5, step, inputs.radius);
                 let previous = origin + dir * (t - stride).max(0.0);
                 let state = blocked(nd, view, origin + dir * t, previous, stride, inputs);
-                if state == 2 && was_in_front && passed_behind.is_none() {
-                    let early = origin + dir * (t - 2.0 / 3.0 * stride).max(0.0);
-                    let late = origin + dir * (t - 1.0 / 3.0 * stride).max(0.0);
-                    passed_behind = [early, late]
-                        .into_iter()
-                        .find(|x| behind_the_front_layer(nd, view, *x));
-                }
-                was_in_front = state == 2;
                 if state == 2 && was_hidden && sheet.is_none() {
                     sheet = Some((t, stride));
                 }
@@ -343,7 +292,7 @@ pub fn pixel_occlusion(
                     came_through_from_behind(nd, view, origin + dir * t, previous, stride)
                 }) || left_at.is_some_and(|t| {
                     beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius)
-                }) || passed_behind.is_some_and(|x| inside_the_layers(nd, view, x, inputs.radius));
+                });
             hits += u32::from(hit);
         }
     }
