@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::harness::GPU_TURN;
+use crate::harness::gpu_turn;
 
 /// The example binary `name`, built once per test run. `cargo test` builds examples only as test
 /// harnesses, so this builds the real binary with the same cargo, profile and target folder as
@@ -42,7 +42,7 @@ fn deforming_characters_renders_headless() {
     let binary = example_binary("deforming_characters");
     let out = std::env::temp_dir().join(format!("dynamic_ao_walkers_{}.png", std::process::id()));
     let run = |extra: &[&str]| {
-        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = gpu_turn();
         let mut args = vec![
             "--headless",
             "--frames",
@@ -122,7 +122,7 @@ fn toasters_renders_headless() {
     let binary = example_binary("toasters");
     let out = std::env::temp_dir().join(format!("dynamic_ao_toasters_{}.png", std::process::id()));
     let run = |extra: &[&str]| {
-        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = gpu_turn();
         let mut args = vec!["--headless", "--width", "160", "--height", "120"];
         args.extend_from_slice(extra);
         args.extend_from_slice(&["--out", out.to_str().unwrap()]);
@@ -152,7 +152,7 @@ fn showcase_renders_ours_bevys_and_none_side_by_side() {
     let out = std::env::temp_dir().join(format!("dynamic_ao_showcase_{}.png", std::process::id()));
     let (width, height) = (600usize, 240usize);
     let run = |extra: &[&str]| {
-        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = gpu_turn();
         let mut args = vec![
             "--headless",
             "--frames",

@@ -442,7 +442,7 @@ fn a_skinned_characters_proxies_cast_what_it_casts() {
 /// splats at full resolution: every term alone (no image-space term) on boxes and a wall in and
 /// just out of view, a room, the skinned walker and, where `../shared/assets` exists, the
 /// third-party models on a floor and CesiumMan just off-screen, every mesh an occluder, at both
-/// radii. Measured: RMSE against ground truth lower than full resolution's on the cube, the room
+/// radii (the third-party models at 2 m). Measured: RMSE against ground truth lower than full resolution's on the cube, the room
 /// corner, the ball, AnimatedMorphCube, BoxAnimated and CornellBox; at most 0.0062 above
 /// elsewhere: the open room at 2 m (0.100 against 0.094), whose 4 cm wall tops are under two
 /// pixels wide at 160 × 120 and take a neighbouring surface's value, and CesiumMan's thin limbs
@@ -469,7 +469,10 @@ fn half_resolution_splats_stay_as_close_to_ground_truth() {
             .and(shared.as_ref().and_then(|f| f.to_str()));
         let mut run = FarRun::new(&scene, folder);
         let bvh = run.bvh();
-        for radius in RADII {
+        // The third-party models at 2 m only, where splats reach farthest and their largest
+        // differences were measured; our scenes at both radii.
+        let radii: &[f32] = if folder.is_some() { &[2.0] } else { &RADII };
+        for &radius in radii {
             let mut truth = None;
             for term in [FarTerm::Spheres, FarTerm::Fields] {
                 let mut frames = Vec::new();

@@ -13,7 +13,7 @@ use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
-use crate::harness::{GPU_TURN, Gpu, difference_stats, plain_ao};
+use crate::harness::{Gpu, difference_stats, gpu_turn, plain_ao};
 use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
@@ -111,7 +111,7 @@ fn ao_bake_writes_a_loadable_field_per_mesh() {
     let out = std::env::temp_dir().join(format!("dynamic_ao_bake_{}", std::process::id()));
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cube_on_plane.glb");
     let run = |args: &[&str]| {
-        let _turn = GPU_TURN.lock().unwrap_or_else(|p| p.into_inner());
+        let _turn = gpu_turn();
         Command::new(&binary)
             .args(args)
             .output()

@@ -1,7 +1,7 @@
 //! The one headless app every GPU test uses: build a scene, render a few frames on whatever
 //! adapter wgpu finds (lavapipe on CI), read the AO buffer, the ND-buffer and the lit image back.
 
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
@@ -134,7 +134,7 @@ impl Frame {
 
     /// Ground-truth visibility of the same camera over `bvh`.
     pub fn ground_truth(&self, bvh: &Bvh, radius: f32) -> Vec<f32> {
-        ground_truth_visibility(
+        ground_truth(
             bvh,
             &self.view,
             &GroundTruthSettings {
@@ -147,12 +147,69 @@ impl Frame {
     }
 }
 
-/// Bevy apps take turns: one renders at a time, so the tests do not fight over two cores.
-pub static GPU_TURN: Mutex<()> = Mutex::new(());
+/// [`ground_truth_visibility`], traced once per test run for each set of triangles, camera,
+/// image size and radius: a trace takes seconds on two cores, and several tests check the same
+/// scenes from the same cameras.
+pub fn ground_truth(bvh: &Bvh, view: &ViewMatrices, settings: &GroundTruthSettings) -> Vec<f32> {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+    static TRACED: Mutex<Vec<(u64, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
+    let mut hasher = DefaultHasher::new();
+    for triangle in bvh.triangles() {
+        let normals = triangle.normals.unwrap_or([Vec3::NAN; 3]);
+        for v in triangle.vertices.iter().chain(&normals) {
+            v.to_array().map(f32::to_bits).hash(&mut hasher);
+        }
+    }
+    for m in [
+        view.world_from_clip,
+        view.view_from_world,
+        view.clip_from_view,
+    ] {
+        m.to_cols_array().map(f32::to_bits).hash(&mut hasher);
+    }
+    let s = settings;
+    (s.width, s.height, s.radius.to_bits(), s.rays_per_pixel).hash(&mut hasher);
+    let key = hasher.finish();
+    let known = |traced: &Vec<(u64, Arc<Vec<f32>>)>| {
+        traced
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| v.clone())
+    };
+    if let Some(truth) = known(&TRACED.lock().unwrap_or_else(|p| p.into_inner())) {
+        return truth.to_vec();
+    }
+    let truth = Arc::new(ground_truth_visibility(bvh, view, settings));
+    TRACED
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .push((key, truth.clone()));
+    truth.to_vec()
+}
+
+/// Turns at the GPU. Two Bevy apps or example processes render at once, one per test thread:
+/// a headless frame at 160 × 120 keeps about 1.2 of two cores busy on lavapipe (measured with
+/// `ao_capture`), so two at a time share the machine rather than fight over it. A test that
+/// measures the process itself (the soak's memory) takes the GPU alone ([`gpu_alone`]).
+static GPU_TURN: RwLock<()> = RwLock::new(());
+
+/// A turn at the GPU, shared with at most one other test.
+pub fn gpu_turn() -> RwLockReadGuard<'static, ()> {
+    GPU_TURN
+        .read()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// The GPU alone: no other test renders until this is dropped.
+pub fn gpu_alone() -> RwLockWriteGuard<'static, ()> {
+    GPU_TURN
+        .write()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 pub struct Gpu {
     pub app: App,
-    _turn: std::sync::MutexGuard<'static, ()>,
+    _turn: RwLockReadGuard<'static, ()>,
     pub camera: Entity,
     readback: AoReadback,
 }
@@ -205,9 +262,7 @@ impl Gpu {
         limits: Option<WgpuLimits>,
         diagnostics: bool,
     ) -> Self {
-        let turn = GPU_TURN
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let turn = gpu_turn();
         let mut app = App::new();
         let plugins = common::headless_plugins()
             .set(bevy::render::RenderPlugin {

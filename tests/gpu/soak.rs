@@ -7,15 +7,13 @@
 #[path = "../../benches/soak/run.rs"]
 mod run;
 
-use crate::harness::GPU_TURN;
+use crate::harness::gpu_alone;
 
 /// Every term on, the sphere term included (its splat pass once made lavapipe keep a new shader
 /// variant at every draw, 6.6 MB each; `spheres/splat.wgsl` says why no longer).
 #[test]
 fn a_thousand_frames_of_changes_stay_bounded() {
-    let _turn = GPU_TURN
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let _turn = gpu_alone();
     if !run::is_measured() {
         // Its own process, in one allocator arena and without the validation layer
         // (`run::ONE_ARENA` and `run::NO_VALIDATION_LAYER` say why), this test alone.

@@ -7,7 +7,7 @@ use bevy::prelude::*;
 
 use crate::examples::example_binary;
 use crate::gltf_scene;
-use crate::harness::GPU_TURN;
+use crate::harness::gpu_turn;
 
 mod accuracy;
 mod malformed;
@@ -18,9 +18,7 @@ fn binary() -> PathBuf {
 }
 
 fn run(args: &[&str]) -> Output {
-    let _turn = GPU_TURN
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let _turn = gpu_turn();
     Command::new(binary())
         .args(args)
         .output()

@@ -118,7 +118,8 @@ fn msaa_camera_gets_the_ao_of_a_plain_camera() {
 }
 
 /// Every far-field scene, every mesh a sphere occluder, near field and spheres counted once at
-/// R = 0.75 m and 2 m, captured without MSAA and then with 4 samples in the same app.
+/// R = 0.75 m (and 2 m on the procedural scenes), captured without MSAA and then with 4 samples
+/// in the same app.
 #[test]
 fn msaa_matches_a_plain_capture_on_every_scene() {
     let mut all = far_scenes::procedural();
@@ -139,7 +140,14 @@ fn msaa_matches_a_plain_capture_on_every_scene() {
         let mut run = FarRun::new(&scene, folder);
         let bvh = run.bvh();
         let camera = run.gpu.camera;
-        for radius in [0.75, 2.0] {
+        // MSAA changes the ND-buffer the radius reads: the procedural scenes show it at both
+        // radii, the third-party models (the slow ones to load and trace) at Bevy's.
+        let radii: &[f32] = if folder.is_some() {
+            &[0.75]
+        } else {
+            &[0.75, 2.0]
+        };
+        for &radius in radii {
             let render = |run: &mut FarRun, msaa| {
                 run.gpu.app.world_mut().entity_mut(camera).insert(msaa);
                 run.render(
