@@ -148,11 +148,11 @@ impl Frame {
 }
 
 /// [`ground_truth_visibility`], traced once per test run for each set of triangles, camera,
-/// image size and radius: a trace takes seconds on two cores, and several tests check the same
-/// scenes from the same cameras.
+/// image size and radius (a 64-bit hash of them all is the key): a trace takes seconds on two
+/// cores, and several tests check the same scenes from the same cameras.
 pub fn ground_truth(bvh: &Bvh, view: &ViewMatrices, settings: &GroundTruthSettings) -> Vec<f32> {
     use std::hash::{DefaultHasher, Hash, Hasher};
-    static TRACED: Mutex<Vec<(u64, Arc<Vec<f32>>)>> = Mutex::new(Vec::new());
+    static TRACED: Mutex<Vec<(u64, Vec<f32>)>> = Mutex::new(Vec::new());
     let mut hasher = DefaultHasher::new();
     for triangle in bvh.triangles() {
         let normals = triangle.normals.unwrap_or([Vec3::NAN; 3]);
@@ -170,30 +170,22 @@ pub fn ground_truth(bvh: &Bvh, view: &ViewMatrices, settings: &GroundTruthSettin
     let s = settings;
     (s.width, s.height, s.radius.to_bits(), s.rays_per_pixel).hash(&mut hasher);
     let key = hasher.finish();
-    let known = |traced: &Vec<(u64, Arc<Vec<f32>>)>| {
-        traced
-            .iter()
-            .find(|(k, _)| *k == key)
-            .map(|(_, v)| v.clone())
-    };
-    if let Some(truth) = known(&TRACED.lock().unwrap_or_else(|p| p.into_inner())) {
-        return truth.to_vec();
+    let traced = || TRACED.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some((_, truth)) = traced().iter().find(|(k, _)| *k == key) {
+        return truth.clone();
     }
-    let truth = Arc::new(ground_truth_visibility(bvh, view, settings));
-    TRACED
-        .lock()
-        .unwrap_or_else(|p| p.into_inner())
-        .push((key, truth.clone()));
-    truth.to_vec()
+    let truth = ground_truth_visibility(bvh, view, settings);
+    traced().push((key, truth.clone()));
+    truth
 }
 
-/// Turns at the GPU. Two Bevy apps or example processes render at once, one per test thread:
-/// a headless frame at 160 × 120 keeps about 1.2 of two cores busy on lavapipe (measured with
-/// `ao_capture`), so two at a time share the machine rather than fight over it. A test that
+/// Turns at the GPU. Every test thread (libtest runs one per core) may render at once: a headless
+/// frame at 160 × 120 keeps about 1.2 of two cores busy on lavapipe (measured with
+/// `ao_capture`), so two at a time share that machine rather than fight over it. A test that
 /// measures the process itself (the soak's memory) takes the GPU alone ([`gpu_alone`]).
 static GPU_TURN: RwLock<()> = RwLock::new(());
 
-/// A turn at the GPU, shared with at most one other test.
+/// A turn at the GPU, shared with the other test threads.
 pub fn gpu_turn() -> RwLockReadGuard<'static, ()> {
     GPU_TURN
         .read()
