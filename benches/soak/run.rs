@@ -205,7 +205,7 @@ fn new_app() -> App {
             1.0 / 30.0,
         )))
         // Fields bake in memory only: the run must not grow a cache folder.
-        .insert_resource(AoFieldCache { folder: None });
+        .insert_resource(AoFieldCache::disabled());
     crate::common::finish_plugins(&mut app);
     app
 }

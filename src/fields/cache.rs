@@ -5,10 +5,15 @@
 //! is the one the mesh and settings would bake. A file's name hashes the mesh, the settings, the
 //! format version and the crate's version; a change to the baker between releases is not in it,
 //! so whoever changes the baker deletes the folder before measuring.
+//!
+//! The folder is kept under a size: after each write the files used longest ago (a read marks a
+//! file used) are deleted until the rest fit, so a game that bakes many meshes, or many releases
+//! of it, does not fill the user's disk.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
 
 use super::baker::BakeGrid;
 use super::format::AoFieldData;
@@ -81,6 +86,9 @@ pub(crate) fn read(path: &Path, grid: &BakeGrid) -> Result<AoFieldData, CacheMis
     if !grid.matches(&field) {
         return reject("its grid is not the one this mesh bakes".into());
     }
+    // Marks the file used, so the size limit deletes others first. Where the platform does not
+    // let a read handle do it (Windows), files go in the order they were written.
+    let _ = file.set_modified(SystemTime::now());
     Ok(field)
 }
 
@@ -125,6 +133,76 @@ pub(crate) fn write(path: &Path, field: &AoFieldData) -> io::Result<()> {
         let _ = fs::remove_file(&temporary);
     }
     written
+}
+
+/// The extension of a cached field's file; [`prune`] deletes no other file but its own
+/// leftovers.
+pub(crate) const FIELD_EXTENSION: &str = "aofield";
+
+/// A `.partial` file this old was left by a process that stopped while writing it.
+const ABANDONED_AFTER: Duration = Duration::from_secs(3600);
+
+/// What [`prune`] deleted.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub(crate) struct Pruned {
+    /// Fields deleted.
+    pub files: usize,
+    /// Their bytes.
+    pub bytes: u64,
+}
+
+/// Deletes the fields in `folder` used longest ago (by modification time, which [`read`] moves)
+/// until the rest take at most `max_bytes`, never `keep` (the field just written, kept even when
+/// it alone is larger), and temporary files abandoned over an hour ago. Symlinks, folders and
+/// files of other names are left alone; a file another process deleted first is skipped.
+pub(crate) fn prune(folder: &Path, max_bytes: u64, keep: &Path) -> io::Result<Pruned> {
+    let now = SystemTime::now();
+    let mut fields = Vec::new();
+    for entry in fs::read_dir(folder)? {
+        let Ok(entry) = entry else { continue };
+        let path = entry.path();
+        let Ok(metadata) = fs::symlink_metadata(&path) else {
+            continue;
+        };
+        if !metadata.file_type().is_file() {
+            continue;
+        }
+        let modified = metadata.modified().unwrap_or(SystemTime::UNIX_EPOCH);
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with('.') && name.ends_with(".partial") {
+            if now
+                .duration_since(modified)
+                .is_ok_and(|age| age > ABANDONED_AFTER)
+            {
+                let _ = fs::remove_file(&path);
+            }
+        } else if path.extension().is_some_and(|e| e == FIELD_EXTENSION) {
+            fields.push((modified, metadata.len(), path));
+        }
+    }
+    let mut total: u64 = fields.iter().map(|(_, len, _)| len).sum();
+    // Oldest first; ties by name, so the order does not depend on the folder's listing.
+    fields.sort();
+    let mut pruned = Pruned::default();
+    for (_, len, path) in fields {
+        if total <= max_bytes {
+            break;
+        }
+        if path == keep {
+            continue;
+        }
+        match fs::remove_file(&path) {
+            Ok(()) => {
+                pruned.files += 1;
+                pruned.bytes += len;
+                total -= len;
+            }
+            Err(error) if error.kind() == io::ErrorKind::NotFound => total -= len,
+            Err(error) => return Err(error),
+        }
+    }
+    Ok(pruned)
 }
 
 /// Creates `folder` (and its parents) if needed, new folders with mode 0700 on Unix, and checks
@@ -245,6 +323,93 @@ mod tests {
         fs::remove_dir_all(&folder).unwrap();
     }
 
+    /// A file of `len` bytes at `path`, last modified `age_s` seconds ago.
+    fn aged_file(path: &Path, len: usize, age_s: u64) {
+        fs::write(path, vec![1u8; len]).unwrap();
+        let when = SystemTime::now() - Duration::from_secs(age_s);
+        File::options()
+            .write(true)
+            .open(path)
+            .unwrap()
+            .set_modified(when)
+            .unwrap();
+    }
+
+    fn names(folder: &Path) -> Vec<String> {
+        let mut names: Vec<_> = fs::read_dir(folder)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn pruning_deletes_the_fields_used_longest_ago_and_nothing_else() {
+        let folder = folder("prune");
+        create_private_folder(&folder).unwrap();
+        for (name, age_s) in [("a", 400), ("b", 300), ("c", 200), ("d", 100)] {
+            aged_file(&folder.join(format!("{name}.aofield")), 1000, age_s);
+        }
+        // Not fields: a user's file, a write in progress and one abandoned two hours ago.
+        aged_file(&folder.join("notes.txt"), 5000, 500);
+        aged_file(&folder.join(".7-1.partial"), 5000, 10);
+        aged_file(&folder.join(".7-2.partial"), 5000, 7200);
+        let pruned = prune(&folder, 2000, &folder.join("d.aofield")).unwrap();
+        assert_eq!(
+            pruned,
+            Pruned {
+                files: 2,
+                bytes: 2000
+            }
+        );
+        assert_eq!(
+            names(&folder),
+            [".7-1.partial", "c.aofield", "d.aofield", "notes.txt"]
+        );
+        // Under the limit nothing goes; at zero all but the field just written go.
+        assert_eq!(
+            prune(&folder, 2000, &folder.join("d.aofield"))
+                .unwrap()
+                .files,
+            0
+        );
+        assert_eq!(
+            prune(&folder, 0, &folder.join("c.aofield")).unwrap().files,
+            1
+        );
+        assert_eq!(names(&folder), [".7-1.partial", "c.aofield", "notes.txt"]);
+        fs::remove_dir_all(&folder).unwrap();
+    }
+
+    #[test]
+    fn reading_a_field_keeps_it_from_pruning() {
+        let folder = folder("prune_read");
+        let field = bake(cube(), &settings(), &|_, _| {}).unwrap();
+        let grid = BakeGrid::plan(&cube(), &settings()).unwrap();
+        let len = AoFieldData::file_size(grid.resolution) as u64;
+        let (old, newer, new) = (
+            folder.join("old.aofield"),
+            folder.join("newer.aofield"),
+            folder.join("new.aofield"),
+        );
+        for (path, age_s) in [(&old, 300), (&newer, 200)] {
+            write(path, &field).unwrap();
+            File::options()
+                .write(true)
+                .open(path)
+                .unwrap()
+                .set_modified(SystemTime::now() - Duration::from_secs(age_s))
+                .unwrap();
+        }
+        // The oldest file is read: it is now the one used last but for the new one.
+        assert_eq!(read(&old, &grid).unwrap(), field);
+        write(&new, &field).unwrap();
+        assert_eq!(prune(&folder, 2 * len, &new).unwrap().files, 1);
+        assert_eq!(names(&folder), ["new.aofield", "old.aofield"]);
+        fs::remove_dir_all(&folder).unwrap();
+    }
+
     #[cfg(unix)]
     #[test]
     fn symlinks_are_neither_read_nor_written_through() {
@@ -265,6 +430,21 @@ mod tests {
         use std::os::unix::fs::PermissionsExt;
         fs::set_permissions(&folder, fs::Permissions::from_mode(0o777)).unwrap();
         assert!(write(&path, &field).is_err());
+        // Pruning deletes neither a link nor what it points at.
+        fs::set_permissions(&folder, fs::Permissions::from_mode(0o700)).unwrap();
+        fs::remove_file(&path).unwrap();
+        std::os::unix::fs::symlink(&victim, &path).unwrap();
+        assert_eq!(
+            prune(&folder, 0, &folder.join("x.aofield")).unwrap().files,
+            0
+        );
+        assert_eq!(fs::read(&victim).unwrap(), b"keep me");
+        assert!(
+            fs::symlink_metadata(&path)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
         fs::remove_dir_all(&folder).unwrap();
     }
 }

@@ -50,6 +50,9 @@ impl Default for AoField {
 /// macOS, `%LOCALAPPDATA%` on Windows), never a folder other users share; set `folder` to `None`
 /// to bake every run without touching the disk.
 ///
+/// The folder is kept under [`max_bytes`](Self::max_bytes): after each bake the fields used
+/// longest ago are deleted until the rest fit.
+///
 /// Files are written atomically and never through a symlink, the folder is made readable by the
 /// user alone, and a cached file is used only if it is a regular file of the size the bake would
 /// write, its checksum holds and its grid is the one this mesh and these settings bake; anything
@@ -58,12 +61,31 @@ impl Default for AoField {
 pub struct AoFieldCache {
     /// The cache folder, created when first written.
     pub folder: Option<PathBuf>,
+    /// The most bytes the folder's fields may take, in bytes. After a field is written, the
+    /// fields read or written longest ago are deleted until the rest fit; the field just
+    /// written is kept even if it alone is larger. `u64::MAX` keeps every field. Default:
+    /// [`AoFieldCache::DEFAULT_MAX_BYTES`].
+    pub max_bytes: u64,
+}
+
+impl AoFieldCache {
+    /// 512 MiB: about 140 fields of the default 32³ (3.7 MB each).
+    pub const DEFAULT_MAX_BYTES: u64 = 512 << 20;
+
+    /// No cache: every field is baked every run, and nothing is written to disk.
+    pub fn disabled() -> Self {
+        Self {
+            folder: None,
+            ..Self::default()
+        }
+    }
 }
 
 impl Default for AoFieldCache {
     fn default() -> Self {
         Self {
             folder: default_cache_folder(),
+            max_bytes: Self::DEFAULT_MAX_BYTES,
         }
     }
 }

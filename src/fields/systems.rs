@@ -1,7 +1,7 @@
 //! Main-world systems: turning each [`AoField`] into a loaded field asset, baking (on the async
 //! compute pool, through the disk cache) where asked.
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use bevy::asset::{AssetEvent, AssetId, Assets, Handle};
 use bevy::ecs::prelude::*;
@@ -120,12 +120,13 @@ fn content_hash(triangles: &[Triangle], settings: &BakeSettings) -> u64 {
 fn bake_or_load(
     triangles: Vec<Triangle>,
     settings: BakeSettings,
-    cache: Option<PathBuf>,
+    cache: AoFieldCache,
 ) -> BakeResult {
-    let path = cache.map(|folder| {
+    let path = cache.folder.as_ref().map(|folder| {
         folder.join(format!(
-            "{:016x}.aofield",
-            content_hash(&triangles, &settings)
+            "{:016x}.{}",
+            content_hash(&triangles, &settings),
+            cache::FIELD_EXTENSION
         ))
     });
     let grid = BakeGrid::plan(&triangles, &settings);
@@ -142,7 +143,10 @@ fn bake_or_load(
     let field = bake(triangles, &settings, &|_, _| {}).map_err(|e| e.to_string())?;
     if let Some(path) = &path {
         match cache::write(path, &field) {
-            Ok(()) => info!("AoField: baked and cached {}", path.display()),
+            Ok(()) => {
+                info!("AoField: baked and cached {}", path.display());
+                prune(path, cache.max_bytes);
+            }
             Err(error) => warn!(
                 "AoField: cannot cache the baked field in {}: {error}",
                 path.display()
@@ -150,6 +154,28 @@ fn bake_or_load(
         }
     }
     Ok(field)
+}
+
+/// Keeps the cache folder of `written` under `max_bytes` (see [`AoFieldCache::max_bytes`]).
+fn prune(written: &Path, max_bytes: u64) {
+    let Some(folder) = written.parent() else {
+        return;
+    };
+    match cache::prune(folder, max_bytes, written) {
+        Ok(pruned) if pruned.files > 0 => info!(
+            "AoField: deleted the {} cached fields used longest ago ({:.1} MB) to keep {} under \
+             {:.1} MB",
+            pruned.files,
+            pruned.bytes as f64 / 1e6,
+            folder.display(),
+            max_bytes as f64 / 1e6
+        ),
+        Ok(_) => {}
+        Err(error) => warn!(
+            "AoField: cannot keep the field cache {} under its size: {error}",
+            folder.display()
+        ),
+    }
 }
 
 /// Steps of a scale per doubling: a field is baked again when its entity's scale changes by
@@ -393,9 +419,9 @@ pub(crate) fn resolve_fields(
                             _ => None,
                         };
                         let triangles = bake_triangles(data, pose, scale);
-                        let folder = cache.folder.clone();
+                        let cache = cache.clone();
                         let task = AsyncComputeTaskPool::get().spawn(async move {
-                            let mut field = bake_or_load(triangles, settings, folder);
+                            let mut field = bake_or_load(triangles, settings, cache);
                             if posed && let Ok(field) = &mut field {
                                 // Its own surface moves away from where it was baked (a running
                                 // fox's legs): measured darker than the near field alone.

@@ -160,7 +160,7 @@ fn field(resolution: u32) -> AoField {
 fn baked(mut gpu: Gpu, fields: usize) -> Gpu {
     gpu.app
         .world_mut()
-        .insert_resource(AoFieldCache { folder: None });
+        .insert_resource(AoFieldCache::disabled());
     for _ in 0..400 {
         gpu.update(1);
         if gpu.app.world().resource::<Assets<AoFieldData>>().len() >= fields {

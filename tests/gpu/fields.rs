@@ -190,7 +190,7 @@ fn gpu_with_fields(scene: &crate::harness::SceneSpec, ao: DynamicAo) -> Gpu {
     let mut gpu = Gpu::new(scene, ao);
     gpu.app
         .world_mut()
-        .insert_resource(AoFieldCache { folder: None });
+        .insert_resource(AoFieldCache::disabled());
     for _ in 0..400 {
         gpu.update(1);
         if gpu.app.world().resource::<Assets<AoFieldData>>().len() >= scene.fields.len() {
@@ -256,18 +256,20 @@ fn gpu_fields_match_the_cpu_evaluation() {
 }
 
 /// Baking on load goes through the disk cache: the first run writes the field there, a corrupt
-/// cache file is baked again and replaced, and bad occluders (no triangles, a zero-scale or NaN
+/// cache file is baked again and replaced (deleting the field used longest ago to stay under the
+/// cache's size), and bad occluders (no triangles, a zero-scale or NaN
 /// transform, a bake request without a mesh) are skipped without a panic.
 #[test]
 fn baked_fields_are_cached_on_disk_and_bad_occluders_are_skipped() {
     let cache = std::env::temp_dir().join(format!("dynamic_ao_field_cache_{}", std::process::id()));
     std::fs::remove_dir_all(&cache).ok();
-    let run = |extra_bad: bool| {
+    let run = |extra_bad: bool, max_bytes: u64| {
         let mut scene = scenes::cube_on_plane();
         scene.fields.push((1, quick_field()));
         let mut gpu = Gpu::new(&scene, fields_only(FieldShading::Cone));
         gpu.app.world_mut().insert_resource(AoFieldCache {
             folder: Some(cache.clone()),
+            max_bytes,
         });
         if extra_bad {
             let world = gpu.app.world_mut();
@@ -318,15 +320,28 @@ fn baked_fields_are_cached_on_disk_and_bad_occluders_are_skipped() {
         let darkest = frame.visibility.iter().copied().fold(1.0, f32::min);
         assert!(darkest < 0.8, "the cube's field should show");
     };
-    run(false);
+    run(false, AoFieldCache::DEFAULT_MAX_BYTES);
     let files: Vec<_> = std::fs::read_dir(&cache)
         .expect("the cache folder exists")
         .map(|e| e.unwrap().path())
         .collect();
     assert_eq!(files.len(), 1, "one field baked, one file cached");
-    assert!(AoFieldData::from_bytes(&std::fs::read(&files[0]).unwrap()).is_ok());
+    let field_bytes = std::fs::read(&files[0]).unwrap();
+    assert!(AoFieldData::from_bytes(&field_bytes).is_ok());
     std::fs::write(&files[0], b"garbage").unwrap();
-    run(true);
+    // A field some other mesh left in the cache, used an hour ago: with room for two fields
+    // (the cube's, and the one baked for the bad cubes in case they become placeable), writing
+    // the new ones deletes it.
+    let stale = cache.join("0123456789abcdef.aofield");
+    std::fs::write(&stale, &field_bytes).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&stale)
+        .unwrap()
+        .set_modified(std::time::SystemTime::now() - std::time::Duration::from_secs(3600))
+        .unwrap();
+    run(true, 2 * field_bytes.len() as u64);
+    assert!(!stale.exists(), "the field used longest ago is deleted");
     // Each bad occluder said why, once.
     assert_logged_once(&["'empty field mesh'", "casts no field", "no usable triangle"]);
     assert_logged_once(&["'zero-scale field'", "zero-size or not finite"]);

@@ -331,7 +331,7 @@ fn fields_follow_their_component_and_their_mesh() {
     let mut gpu = Gpu::new(&scene, fields_only());
     gpu.app
         .world_mut()
-        .insert_resource(AoFieldCache { folder: None });
+        .insert_resource(AoFieldCache::disabled());
     // A mesh the CPU cannot read once it is uploaded, beside the scene; it gets its `AoField`
     // once its data has gone to the render world.
     let world = gpu.app.world_mut();
