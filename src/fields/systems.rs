@@ -334,11 +334,6 @@ pub(crate) fn resolve_fields(
         } else {
             warned.remove(&(entity, FieldWarning::Degenerate));
         }
-        let (steps, scale) = if placeable {
-            scale_steps(transform)
-        } else {
-            ([0; 3], Vec3::ONE)
-        };
         let handle = match field {
             AoField::Asset(handle) => Some(Ok((handle.clone(), Vec3::ONE))),
             AoField::Bake(settings) => {
@@ -372,6 +367,16 @@ pub(crate) fn resolve_fields(
                     }
                     continue;
                 }
+                if !placeable {
+                    // No scale to bake at: a field baked at scale 1 would be thrown away once
+                    // the transform is usable again, at its own scale. The field it had stays
+                    // (the render pass skips it while it cannot be placed).
+                    if pending {
+                        commands.entity(entity).remove::<PendingAoField>();
+                    }
+                    continue;
+                }
+                let (steps, scale) = scale_steps(transform);
                 let settings = settings.for_camera(radius, near);
                 let weights = mesh_morph_weights(morphs, &morph_weights);
                 let posed = skinned.is_some() || weights.iter().any(|w| *w != 0.0);
