@@ -118,7 +118,7 @@ pub fn sphere_occlusion_within(p: Vec3, n: Vec3, centre: Vec3, radius: f32, reac
 /// One proxy's occlusion of the receiver (`p`, `n`) within `reach` (≤ 0: no limit): the share of
 /// its ambient light the proxy blocks, all of it counted.
 pub fn proxy_occlusion(proxy: &OccluderSphere, p: Vec3, n: Vec3, reach: f32) -> f32 {
-    proxy_channels(proxy, p, n, reach, 0.0, &|_, _| 0.0, &|_, _| 0.0)[1]
+    proxy_channels(proxy, false, p, n, reach, 0.0, &|_, _| 0.0, &|_, _| 0.0)[1]
 }
 
 /// How far from its centre a proxy's occlusion reaches under `reach` with camera radius `radius`,
@@ -182,10 +182,16 @@ pub fn far_field_channels(
                 if p.distance(proxy.center) > extent {
                     continue;
                 }
-                let [a, b] =
-                    proxy_channels(proxy, p, n, reach, camera.near_radius, &held, &|x, f| {
-                        view.seen_face(x, f)
-                    });
+                let [a, b] = proxy_channels(
+                    proxy,
+                    occluder.articulated,
+                    p,
+                    n,
+                    reach,
+                    camera.near_radius,
+                    &held,
+                    &|x, f| view.seen_face(x, f),
+                );
                 open[0] *= 1.0 - a;
                 open[1] *= 1.0 - b;
                 if occluder.articulated {
@@ -215,9 +221,12 @@ pub fn far_field_occlusion(
 
 /// One proxy's occlusion in the two channels `splat.wgsl` writes: the part within `near` (> 0)
 /// the ND-buffer does not hold (`held`, times `seen_face` for a box's face: how fully the camera
-/// sees it), and the share of the rest; with `near` ≤ 0, (0, all).
+/// sees it; for the boxes of an `articulated` mesh, nothing of a face from a receiver within
+/// 0.1 `near` of its plane), and the share of the rest; with `near` ≤ 0, (0, all).
+#[allow(clippy::too_many_arguments)]
 pub fn proxy_channels(
     proxy: &OccluderSphere,
+    articulated: bool,
     p: Vec3,
     n: Vec3,
     reach: f32,
@@ -274,7 +283,9 @@ pub fn proxy_channels(
                     }
                     let inner_reach = if reach > 0.0 { near.min(reach) } else { near };
                     let (inner, at) = face_occlusion(p, n, face_centre, f, (b, c), inner_reach);
-                    if inner > 0.0 {
+                    // One of several boxes filling a solid: a receiver that near its face lies
+                    // on the solid's surface (`splat.wgsl`).
+                    if inner > 0.0 && (!articulated || f.dot(p - face_centre) > tolerance) {
                         occlusion[0] += inner * (1.0 - held(at, tolerance) * seen_face(at, f));
                     }
                     if !one_part {

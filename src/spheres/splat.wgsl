@@ -203,7 +203,14 @@ fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, p: vec3<f32>, n: vec3<f32>, r
                 continue;
             }
             let inner = face_occlusion(p, n, face_centre, f, b, c, select(near, min(near, reach), reach > 0.0));
-            if inner.occlusion > 0.0 {
+            // The boxes of a skinned mesh (or of one solid that got several) fill it between them,
+            // each fitting its part loosely: a receiver within the ND-buffer's tolerance of one's
+            // face lies on that solid's surface, and the face, tilted against it, would cover up
+            // to half its sky. What occludes it that near is the solid's own relief, which the
+            // near field reads from the ND-buffer; counted here as well, it drew the outlines of
+            // a character's leg boxes on its legs and on the floor between them. A lone box fits
+            // its mesh exactly, and what stands that near its face (a floor at a wall) is occluded.
+            if inner.occlusion > 0.0 && (proxy.kind.z < 0.5 || dot(f, p - face_centre) > tolerance) {
                 occlusion.x += inner.occlusion * (1.0 - held(vs, inner.centre, tolerance) * seen_face(vs, inner.centre, f));
             }
             if !one_part {

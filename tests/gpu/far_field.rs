@@ -230,10 +230,20 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// near field's reach, at least a tenth better, but for the voxels (at least 7%). At this size
 /// the default runs at full resolution (`DynamicAo::small_viewport_pixels`), which brought it
 /// alone closer to the truth than at half resolution and left the terms less to add. Measured:
-/// the walker 0.0222 alone at 0.75 m, 0.0207 / 0.0219 / 0.0209 joined (spheres / fields /
-/// voxels), at 2 m 0.0232 and 0.0199 / 0.0199 / 0.0211 (the voxels 0.91×); CesiumMan 0.0133 at
-/// 0.75 m, 0.0124 / 0.0134 / 0.0134, at 2 m 0.0199 and 0.0129 / 0.0132 / 0.0170 (the voxels
-/// 0.85×). The accumulated voxel term blurs by one pixel (`AoBlur::voxel_accumulated_radius`);
+/// the walker 0.0222 alone at 0.75 m, 0.0211 / 0.0219 / 0.0209 joined (spheres / fields /
+/// voxels), at 2 m 0.0232 and 0.0203 / 0.0199 / 0.0211 (the voxels 0.91×); CesiumMan 0.0133 at
+/// 0.75 m, 0.0122 / 0.0134 / 0.0134, at 2 m 0.0199 and 0.0127 / 0.0132 / 0.0170 (the voxels
+/// 0.85×).
+///
+/// The Fox seen end-on (`far_scenes::fox_end_on`), where the default misses the shadow under the
+/// body, must gain a quarter at 0.75 m and a fifth at 2 m (the voxels 17%): measured 0.0302
+/// alone at 0.75 m, 0.0214 / 0.0199 / 0.0168 joined (0.71×, 0.66×, 0.56×), at 2 m 0.0383 and
+/// 0.0282 / 0.0198 / 0.0222 (0.74×, 0.52×, 0.58×). Before a box's near part skipped receivers
+/// within the ND-buffer's tolerance of its face (`splat.wgsl`), the spheres made it worse at
+/// 0.75 m (0.0300 → 0.0347 at this size), drawing the leg boxes' outlines on the Fox's legs and the
+/// floor between them; on the walker and CesiumMan that change moved them by under 0.0005.
+///
+/// The accumulated voxel term blurs by one pixel (`AoBlur::voxel_accumulated_radius`);
 /// at the 4 pixels it kept before, the voxels read 0.0214 and 0.0225 (0.97×) on the walker and
 /// 0.0139 (1.05×) and 0.0194 (0.97×) on CesiumMan. At half resolution the voxels
 /// gained at least 5% at 2 m (the walker 0.0251 against the default's 0.0268, 0.94×, since a ray through a
@@ -241,21 +251,25 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// against 0.0275, 0.91×, and CesiumMan 0.0237 against 0.0262, 0.90×, since the default's rays'
 /// last step lies at R; under 0.9× before). Before the ray march counted steps
 /// just behind the back-face layer as blocked the default alone was farther from the truth and
-/// the far field's share larger (7–19%, 11–15%, 27–44%). CesiumMan needs `../shared/assets`.
+/// the far field's share larger (7–19%, 11–15%, 27–44%). CesiumMan and the Fox need
+/// `../shared/assets`.
 #[test]
 fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
-    let mut scenes = vec![(far_scenes::walker_on_floor(), None)];
+    // Each scene with the share of the default's error a term may keep at 0.75 m (beyond the
+    // 0.0005 of slack) and at 2 m.
+    let mut scenes = vec![(far_scenes::walker_on_floor(), None, 1.0, 0.9)];
     let shared = crate::models::shared_assets();
     if let Some(folder) = shared.as_ref().and_then(|p| p.to_str()) {
         scenes.extend(
             far_scenes::third_party()
                 .into_iter()
                 .filter(|s| s.name == "CesiumMan on floor")
-                .map(|s| (s, Some(folder))),
+                .map(|s| (s, Some(folder), 1.0, 0.9)),
         );
+        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.75, 0.8));
     }
     let mut failed = Vec::new();
-    for (scene, folder) in scenes {
+    for (scene, folder, near_share, far_share) in scenes {
         let mut run = FarRun::new(&scene, folder);
         run.image_space = DynamicAo::default();
         let bvh = run.bvh();
@@ -265,7 +279,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             scene.name,
             "default",
             0.75,
-            |_, alone| alone + 0.0005,
+            |_, alone| near_share * alone + 0.0005,
         ));
         failed.extend(check_joined(
             &mut run,
@@ -275,9 +289,9 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             2.0,
             |term, alone| {
                 if term == FarTerm::Voxels {
-                    0.93 * alone
+                    (far_share + 0.03) * alone
                 } else {
-                    0.9 * alone
+                    far_share * alone
                 }
             },
         ));

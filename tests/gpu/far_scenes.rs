@@ -70,6 +70,30 @@ pub fn model_on_floor(name: &'static str, model: Model) -> FarScene {
     }
 }
 
+/// The Fox, 1.8 m high, seen from in front along its body, as `docs/model_on_floor.py --height
+/// 1.8 --eye 0,1.5,3.6 --target 0,0.6,0` frames it: the view ray through its head leaves the body
+/// and enters it again farther back, so the two ND layers miss the floor's shadow under the body,
+/// and the proxies of its legs and chest stand right beside the receivers on them.
+pub fn fox_end_on() -> FarScene {
+    FarScene {
+        camera: Some(|lo, hi| {
+            let c = Vec3::new((lo.x + hi.x) / 2.0, 0.0, (lo.z + hi.z) / 2.0);
+            Transform::from_translation(c + Vec3::new(0.0, 1.5, 3.6))
+                .looking_at(c + Vec3::new(0.0, 0.6, 0.0), Vec3::Y)
+        }),
+        ..model_on_floor(
+            "Fox end-on",
+            Model {
+                file: "Fox/Fox.glb",
+                animation: Some(0),
+                time: 0.3,
+                height: 1.8,
+                at: Vec2::ZERO,
+            },
+        )
+    }
+}
+
 /// The strip of floor beside an occluder just right of the view: the last 12 columns.
 pub const STRIP: std::ops::Range<u32> = WIDTH - 12..WIDTH;
 
