@@ -238,10 +238,11 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// The Fox seen end-on (`far_scenes::fox_end_on`), where the default misses the shadow under the
 /// body, must gain a quarter at 0.75 m and a fifth at 2 m (the voxels 17%): measured 0.0302
 /// alone at 0.75 m, 0.0214 / 0.0199 / 0.0168 joined (0.71×, 0.66×, 0.56×), at 2 m 0.0383 and
-/// 0.0282 / 0.0198 / 0.0222 (0.74×, 0.52×, 0.58×). Before a box's near part skipped receivers
-/// within the ND-buffer's tolerance of its face (`splat.wgsl`), the spheres made it worse at
-/// 0.75 m (0.0300 → 0.0347 at this size), drawing the leg boxes' outlines on the Fox's legs and the
-/// floor between them; on the walker and CesiumMan that change moved them by under 0.0005.
+/// 0.0282 / 0.0198 / 0.0222 (0.74×, 0.52×, 0.58×). Before the boxes of a skinned mesh skipped
+/// their faces' near part for receivers within the ND-buffer's tolerance of a face (`splat.wgsl`),
+/// the spheres failed here: 0.0353 at 0.75 m (worse than the default alone) and 0.0352 at 2 m
+/// (0.92×), drawing the leg boxes' outlines on the Fox's legs and the floor between them; on the
+/// walker and CesiumMan that change moved them by under 0.0005.
 ///
 /// The accumulated voxel term blurs by one pixel (`AoBlur::voxel_accumulated_radius`);
 /// at the 4 pixels it kept before, the voxels read 0.0214 and 0.0225 (0.97×) on the walker and
