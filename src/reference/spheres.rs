@@ -118,7 +118,7 @@ pub fn sphere_occlusion_within(p: Vec3, n: Vec3, centre: Vec3, radius: f32, reac
 /// One proxy's occlusion of the receiver (`p`, `n`) within `reach` (≤ 0: no limit): the share of
 /// its ambient light the proxy blocks, all of it counted.
 pub fn proxy_occlusion(proxy: &OccluderSphere, p: Vec3, n: Vec3, reach: f32) -> f32 {
-    proxy_channels(proxy, false, p, n, reach, 0.0, &|_, _| 0.0, &|_, _| 0.0)[1]
+    proxy_channels(proxy, false, p, n, reach, 0.0, &HeldByNd::NOTHING)[1]
 }
 
 /// How far from its centre a proxy's occlusion reaches under `reach` with camera radius `radius`,
@@ -172,7 +172,10 @@ pub fn far_field_channels(
     occluders: &[OccluderSpheres],
     camera: &ProxyCamera,
 ) -> Vec<[f32; 2]> {
-    let held = |x: Vec3, tolerance: f32| nd.holds(view, camera.use_back, x, tolerance);
+    let held = HeldByNd {
+        point: &|x, tolerance| nd.holds(view, camera.use_back, x, tolerance),
+        face: &|x, f| view.seen_face(x, f),
+    };
     nd.per_receiver(view, |receiver| {
         let (p, n) = (receiver.world_position, receiver.texel.normal);
         let (mut open, mut articulated_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
@@ -190,7 +193,6 @@ pub fn far_field_channels(
                     reach,
                     camera.near_radius,
                     &held,
-                    &|x, f| view.seen_face(x, f),
                 );
                 open[0] *= 1.0 - a;
                 open[1] *= 1.0 - b;
@@ -219,11 +221,28 @@ pub fn far_field_occlusion(
         .collect()
 }
 
+/// What the ND-buffer holds, as [`proxy_channels`] asks it under count-once.
+pub struct HeldByNd<'a> {
+    /// How far the ND-buffer holds the geometry at world point `x` with a depth tolerance (m),
+    /// 0–1 ([`NdBuffer::holds`]).
+    pub point: &'a dyn Fn(Vec3, f32) -> f32,
+    /// How fully the camera sees a box face at `x` with outward unit normal `f`, 0–1
+    /// ([`ViewMatrices::seen_face`]).
+    pub face: &'a dyn Fn(Vec3, Vec3) -> f32,
+}
+
+impl HeldByNd<'static> {
+    /// Nothing held: the far field counts every part of a proxy.
+    pub const NOTHING: Self = Self {
+        point: &|_, _| 0.0,
+        face: &|_, _| 0.0,
+    };
+}
+
 /// One proxy's occlusion in the two channels `splat.wgsl` writes: the part within `near` (> 0)
-/// the ND-buffer does not hold (`held`, times `seen_face` for a box's face: how fully the camera
-/// sees it; for the boxes of an `articulated` mesh, nothing of a face from a receiver within
-/// 0.1 `near` of its plane), and the share of the rest; with `near` ≤ 0, (0, all).
-#[allow(clippy::too_many_arguments)]
+/// the ND-buffer does not hold (by `held`; for the boxes of an `articulated` mesh, nothing of a
+/// face from a receiver within 0.1 `near` of its plane), and the share of the rest; with `near`
+/// ≤ 0, (0, all).
 pub fn proxy_channels(
     proxy: &OccluderSphere,
     articulated: bool,
@@ -231,8 +250,7 @@ pub fn proxy_channels(
     n: Vec3,
     reach: f32,
     near: f32,
-    held: &dyn Fn(Vec3, f32) -> f32,
-    seen_face: &dyn Fn(Vec3, Vec3) -> f32,
+    held: &HeldByNd,
 ) -> [f32; 2] {
     let tolerance = 0.1 * near;
     let centre = proxy.center;
@@ -244,7 +262,7 @@ pub fn proxy_channels(
             if near > 0.0 {
                 let inner = sphere_occlusion_within(p, n, centre, radius, near);
                 clamp([
-                    inner * (1.0 - held(centre, radius + tolerance)),
+                    inner * (1.0 - (held.point)(centre, radius + tolerance)),
                     share_beyond(all, inner),
                 ])
             } else {
@@ -286,7 +304,8 @@ pub fn proxy_channels(
                     // One of several boxes filling a solid: a receiver that near its face lies
                     // on the solid's surface (`splat.wgsl`).
                     if inner > 0.0 && (!articulated || f.dot(p - face_centre) > tolerance) {
-                        occlusion[0] += inner * (1.0 - held(at, tolerance) * seen_face(at, f));
+                        occlusion[0] +=
+                            inner * (1.0 - (held.point)(at, tolerance) * (held.face)(at, f));
                     }
                     if !one_part {
                         let all = face_occlusion(p, n, face_centre, f, (b, c), reach).0;

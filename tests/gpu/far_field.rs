@@ -236,12 +236,15 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// 0.85×).
 ///
 /// The Fox seen end-on (`far_scenes::fox_end_on`), where the default misses the shadow under the
-/// body, must gain a quarter at 0.75 m and a fifth at 2 m (the voxels 17%): measured 0.0302
-/// alone at 0.75 m, 0.0214 / 0.0199 / 0.0168 joined (0.71×, 0.66×, 0.56×), at 2 m 0.0383 and
-/// 0.0282 / 0.0198 / 0.0222 (0.74×, 0.52×, 0.58×). Before the boxes of a skinned mesh skipped
-/// their faces' near part for receivers within the ND-buffer's tolerance of a face (`splat.wgsl`),
-/// the spheres failed here: 0.0353 at 0.75 m (worse than the default alone) and 0.0352 at 2 m
-/// (0.92×), drawing the leg boxes' outlines on the Fox's legs and the floor between them; on the
+/// body, must keep at most 0.68× the default's error at 0.75 m and 0.75× at 2 m (the voxels
+/// 0.78×): measured 0.0302 alone at 0.75 m, 0.0200 / 0.0199 / 0.0168 joined (0.66×, 0.66×,
+/// 0.56×), at 2 m 0.0383 and 0.0274 / 0.0198 / 0.0222 (0.72×, 0.52×, 0.58×). While a skinned
+/// mesh's lightest joint group joined the nearest centre rather than the group it touches, the
+/// Fox's two front feet shared one box, which walled off the floor between the legs: the spheres
+/// read 0.0214 (0.71×) and 0.0282 (0.74×), and fail here at 0.75 m. Before the boxes of a skinned
+/// mesh skipped their faces' near part for receivers within the ND-buffer's tolerance of a face
+/// (`splat.wgsl`), the spheres read 0.0353 at 0.75 m (worse than the default alone) and 0.0352
+/// at 2 m (0.92×), drawing the leg boxes' outlines on the Fox's legs and the floor between them; on the
 /// walker and CesiumMan that change moved them by under 0.0005.
 ///
 /// The accumulated voxel term blurs by one pixel (`AoBlur::voxel_accumulated_radius`);
@@ -267,7 +270,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
                 .filter(|s| s.name == "CesiumMan on floor")
                 .map(|s| (s, Some(folder), 1.0, 0.9)),
         );
-        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.75, 0.8));
+        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.68, 0.75));
     }
     let mut failed = Vec::new();
     for (scene, folder, near_share, far_share) in scenes {

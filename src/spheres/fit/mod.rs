@@ -25,7 +25,8 @@ mod samples;
 #[cfg(test)]
 mod tests;
 
-use bevy::math::{Mat3, Vec3};
+use bevy::math::{IVec3, Mat3, Vec3};
+use bevy::platform::collections::HashSet;
 
 use super::lloyd::{ClusteredMesh, RestSphere, sphere_joints};
 use crate::geometry::rest_mesh::RestMesh;
@@ -83,8 +84,12 @@ pub fn fit_boxes(mesh: &RestMesh, count: u32) -> ClusteredMesh {
     group_vertices(mesh, &boxes)
 }
 
-/// A skinned mesh starts from one cluster per joint (by the joint that moves each sample most),
-/// the lightest merged into the one with the nearest centre until at most `count` remain.
+/// A skinned mesh starts from one cluster per joint (by the joint that moves each sample most).
+/// The lightest is merged into the group it touches most (samples in the same or adjacent cells)
+/// until at most `count` remain; one that touches none joins the group with the nearest centre.
+/// Touch, not nearness of centres, keeps a foot with its own leg: two feet side by side have
+/// centres closer than a foot's and its shin's, and one box round both would wall off the floor
+/// between them.
 fn joint_clusters(samples: Vec<Sample>, count: usize, cell: f32) -> Vec<Cluster> {
     let mut groups: Vec<(u16, Vec<Sample>)> = Vec::new();
     for s in samples {
@@ -94,34 +99,63 @@ fn joint_clusters(samples: Vec<Sample>, count: usize, cell: f32) -> Vec<Cluster>
         }
     }
     groups.sort_by_key(|(j, _)| *j);
-    let mut groups: Vec<Vec<Sample>> = groups.into_iter().map(|(_, g)| g).collect();
+    let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
+    let mut groups: Vec<(Vec<Sample>, HashSet<IVec3>)> = groups
+        .into_iter()
+        .map(|(_, g)| {
+            let cells = g.iter().map(|s| cell_of(s.position)).collect();
+            (g, cells)
+        })
+        .collect();
     let weight = |g: &[Sample]| g.iter().map(|s| s.weight).sum::<f32>();
     let centre = |g: &[Sample]| {
         g.iter().fold(Vec3::ZERO, |m, s| m + s.position * s.weight) / weight(g).max(1e-30)
     };
-    let total: f32 = groups.iter().map(|g| weight(g)).sum();
+    let total: f32 = groups.iter().map(|(g, _)| weight(g)).sum();
     loop {
         let lightest = (0..groups.len())
-            .min_by(|&a, &b| weight(&groups[a]).total_cmp(&weight(&groups[b])))
+            .min_by(|&a, &b| weight(&groups[a].0).total_cmp(&weight(&groups[b].0)))
             .expect("at least one group");
         // Joints that move only a sliver of the surface do not get a box of their own.
-        let sliver = weight(&groups[lightest]) < 0.01 * total;
+        let sliver = weight(&groups[lightest].0) < 0.01 * total;
         if groups.len() <= 1 || (groups.len() <= count.max(1) && !sliver) {
             break;
         }
-        let merged = groups.swap_remove(lightest);
+        let (merged, merged_cells) = groups.swap_remove(lightest);
         let at = centre(&merged);
-        let nearest = (0..groups.len())
-            .min_by(|&a, &b| {
-                centre(&groups[a])
-                    .distance_squared(at)
-                    .total_cmp(&centre(&groups[b]).distance_squared(at))
-            })
+        let touching = |cells: &HashSet<IVec3>| {
+            merged_cells
+                .iter()
+                .filter(|c| NEIGHBOURS.iter().any(|d| cells.contains(&(**c + *d))))
+                .count()
+        };
+        // Most cells touching first, then the nearest centre.
+        let into = groups
+            .iter()
+            .map(|(g, cells)| (touching(cells), -centre(g).distance_squared(at)))
+            .enumerate()
+            .max_by(|(_, a), (_, b)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)))
+            .map(|(i, _)| i)
             .expect("another group");
-        groups[nearest].extend(merged);
+        groups[into].0.extend(merged);
+        groups[into].1.extend(merged_cells);
     }
-    groups.into_iter().map(|g| Cluster::new(g, cell)).collect()
+    groups
+        .into_iter()
+        .map(|(g, _)| Cluster::new(g, cell))
+        .collect()
 }
+
+/// A cell and its 26 neighbours, as offsets.
+const NEIGHBOURS: [IVec3; 27] = {
+    let mut offsets = [IVec3::ZERO; 27];
+    let mut i = 0;
+    while i < 27 {
+        offsets[i] = IVec3::new(i as i32 % 3 - 1, (i as i32 / 3) % 3 - 1, i as i32 / 9 - 1);
+        i += 1;
+    }
+    offsets
+};
 
 /// Every vertex joins the box nearest to it (0 inside); each box's refit data comes from its
 /// vertices.

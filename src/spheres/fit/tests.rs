@@ -96,3 +96,51 @@ fn every_vertex_belongs_to_a_box() {
     assert_eq!(fitted.order.len(), mesh.positions.len());
     assert!(!fitted.spheres.is_empty() && fitted.spheres.len() <= 4);
 }
+
+/// Samples along a vertical bar of square section, `joint` moving them all.
+fn bar(x: f32, y: std::ops::Range<f32>, side: f32, joint: u16) -> Vec<samples::Sample> {
+    let step = 0.01;
+    let mut out = Vec::new();
+    let mut h = y.start;
+    while h < y.end {
+        for i in 0..=(side / step) as i32 {
+            for (dx, dz) in [(i as f32 * step, 0.0), (i as f32 * step, side)] {
+                out.push(samples::Sample {
+                    position: Vec3::new(x + dx, h, dz),
+                    weight: step * step,
+                    normal: Vec3::Z,
+                    joint,
+                });
+            }
+        }
+        h += step;
+    }
+    out
+}
+
+#[test]
+fn a_foot_joins_its_own_leg_not_the_foot_beside_it() {
+    // Two legs 0.3 m apart, each a thigh (0.5 m, 8 cm thick) over a lighter shin (0.45 m,
+    // 6 cm). The shins' centres are 0.3 m apart, each 0.475 m from its own thigh's.
+    let cell = 0.02;
+    let samples: Vec<_> = [
+        bar(-0.15, 0.5..1.0, 0.08, 0),
+        bar(-0.15, 0.05..0.5, 0.06, 1),
+        bar(0.15, 0.5..1.0, 0.08, 2),
+        bar(0.15, 0.05..0.5, 0.06, 3),
+    ]
+    .concat();
+    let clusters = joint_clusters(samples, 3, cell);
+    assert_eq!(clusters.len(), 3);
+    for c in &clusters {
+        let sides = (
+            c.samples.iter().any(|s| s.position.x < 0.0),
+            c.samples.iter().any(|s| s.position.x > 0.0),
+        );
+        assert!(
+            sides != (true, true),
+            "a box spans both legs: {:?}",
+            c.center
+        );
+    }
+}
