@@ -385,7 +385,12 @@ fn store_visibility(
         capture.options.width as usize,
         capture.options.height as usize,
     );
-    capture.visibility = Some(common::unpad_f32(&readback.data, w, h, 1));
+    let visibility = common::unpad_f32(&readback.data, w, h, 1);
+    // −1: the camera's passes have not compiled yet; the read-back goes on every frame.
+    if visibility.first().is_some_and(|v| *v < 0.0) {
+        return;
+    }
+    capture.visibility = Some(visibility);
     commands.entity(readback.entity).despawn();
     if let Some(compare) = &capture.compare {
         // Its screenshot of our target also writes `--out-color` (one screenshot per target).

@@ -10,11 +10,23 @@ use bevy::shader::ShaderCacheError;
 /// Every pipeline of this crate has a label that starts so.
 const LABEL_PREFIX: &str = "dynamic_ao";
 
+/// The labels of our pipelines that failed for good: while any has, a camera showing Bevy's
+/// SSAO shows its fallback, not a pass still compiling.
+#[derive(Resource, Default)]
+pub(crate) struct FailedPipelines(HashSet<String>);
+
+impl FailedPipelines {
+    /// Whether any of our pipelines failed for good.
+    pub fn any(&self) -> bool {
+        !self.0.is_empty()
+    }
+}
+
 /// Logs an error naming each of our pipelines that failed for good (a shader that does not
 /// compile on this adapter): the cameras that need it keep Bevy's SSAO.
 pub(super) fn report_failed_pipelines(
     pipeline_cache: Res<PipelineCache>,
-    mut reported: Local<HashSet<String>>,
+    mut reported: ResMut<FailedPipelines>,
 ) {
     for pipeline in pipeline_cache.pipelines() {
         let CachedPipelineState::Err(error) = &pipeline.state else {
@@ -34,7 +46,7 @@ pub(super) fn report_failed_pipelines(
         let Some(label) = label.filter(|l| l.starts_with(LABEL_PREFIX)) else {
             continue;
         };
-        if reported.insert(label.to_owned()) {
+        if reported.0.insert(label.to_owned()) {
             error!(
                 "bevy_dynamic_ao: the pipeline '{label}' failed to compile on this adapter \
                  ({error}); cameras that need it keep Bevy's SSAO"

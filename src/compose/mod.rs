@@ -21,6 +21,7 @@ mod node;
 mod pipeline;
 mod ssao_slot;
 
+pub(crate) use failed::FailedPipelines;
 pub(crate) use pipeline::bevy_ssao_format;
 pub(crate) use ssao_slot::{ParkedSsao, visibility_texture};
 
@@ -52,6 +53,7 @@ impl Plugin for ComposePlugin {
             return;
         };
         render_app
+            .init_resource::<FailedPipelines>()
             .init_gpu_resource::<pipeline::ComposePipeline>()
             .init_gpu_resource::<debug_view::DebugViewPipeline>()
             .init_gpu_resource::<SpecializedRenderPipelines<debug_view::DebugViewPipeline>>()

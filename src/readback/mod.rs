@@ -28,11 +28,16 @@ use crate::view::drop_without_ao;
 /// Asks the plugin to copy this camera's AO buffer and both ND-buffer layers every frame.
 ///
 /// All three images must have the camera's physical viewport size (pixels); [`AoReadback::new`]
-/// makes them. Where the camera sees no geometry, visibility reads 1.
+/// makes them. Where the camera sees no geometry, visibility reads 1. On a frame where the view's
+/// AO is not yet its technique's (the first frames of a camera, while the passes of that
+/// technique still compile and Bevy's SSAO or nothing fills the texture in their place),
+/// visibility reads −1 on every pixel: read again a frame later. Where one of the plugin's
+/// pipelines failed to compile for good, the camera keeps Bevy's SSAO and the copy shows it.
 #[derive(Component, ExtractComponent, Reflect, Clone, Debug)]
 #[reflect(Component, Clone, Debug)]
 pub struct AoReadback {
-    /// Visibility (1 = open) as Bevy's PBR lighting receives it, `R32Float`.
+    /// Visibility (1 = open) as Bevy's PBR lighting receives it, `R32Float`; −1 on frames where the
+    /// technique's passes have not compiled yet.
     pub visibility: Handle<Image>,
     /// Front layer: world-space unit normal in `rgb`, reverse-Z depth in `a` (0 = nothing),
     /// `Rgba32Float`.
@@ -43,27 +48,30 @@ pub struct AoReadback {
 }
 
 impl AoReadback {
-    /// Makes the three images for a viewport of `size` pixels.
+    /// Makes the three images for a viewport of `size` pixels. Visibility starts at −1, so that
+    /// it reads "not there yet" until the first copy, which waits for its own pipeline.
     pub fn new(images: &mut Assets<Image>, size: UVec2) -> Self {
-        let mut image = |format| {
-            let mut image = Image::new_uninit(
-                Extent3d {
-                    width: size.x.max(1),
-                    height: size.y.max(1),
-                    depth_or_array_layers: 1,
-                },
-                TextureDimension::D2,
-                format,
-                RenderAssetUsages::RENDER_WORLD,
-            );
+        let mut image = |format, fill: Option<f32>| {
+            let extent = Extent3d {
+                width: size.x.max(1),
+                height: size.y.max(1),
+                depth_or_array_layers: 1,
+            };
+            let (dimension, usage) = (TextureDimension::D2, RenderAssetUsages::RENDER_WORLD);
+            let mut image = match fill {
+                Some(value) => {
+                    Image::new_fill(extent, dimension, &value.to_le_bytes(), format, usage)
+                }
+                None => Image::new_uninit(extent, dimension, format, usage),
+            };
             image.texture_descriptor.usage |=
                 TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
             images.add(image)
         };
         Self {
-            visibility: image(TextureFormat::R32Float),
-            front: image(TextureFormat::Rgba32Float),
-            back: image(TextureFormat::Rgba32Float),
+            visibility: image(TextureFormat::R32Float, Some(-1.0)),
+            front: image(TextureFormat::Rgba32Float, None),
+            back: image(TextureFormat::Rgba32Float, None),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The read-back copy pass.
 
 use bevy::ecs::prelude::*;
+use bevy::pbr::SsaoPipelineId;
 use bevy::render::{
     camera::ExtractedCamera,
     extract_component::DynamicUniformIndex,
@@ -9,22 +10,42 @@ use bevy::render::{
 };
 
 use super::pipeline::{ReadbackBindGroup, ReadbackPipeline};
-use crate::view::DynamicAoUniform;
+use crate::compose::{AoPassesReady, FailedPipelines};
+use crate::view::{DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn readback_pass(
     view: ViewQuery<(
         &ExtractedCamera,
         &ReadbackBindGroup,
         &DynamicUniformIndex<DynamicAoUniform>,
+        &DynamicAoView,
+        Has<AoPassesReady>,
+        Option<&SsaoPipelineId>,
     )>,
     pipeline: Res<ReadbackPipeline>,
     pipeline_cache: Res<PipelineCache>,
+    failed: Res<FailedPipelines>,
     mut ctx: RenderContext,
 ) {
-    let (camera, bind_group, settings_index) = view.into_inner();
+    let (camera, bind_group, settings_index, ao_view, ours_ready, bevy_ssao) = view.into_inner();
+    // Until the passes of the view's technique have compiled, its texture holds zeros or, in
+    // their place, Bevy's SSAO: the copy says so rather than pass either off as the view's AO.
+    // Where one of ours failed for good, Bevy's SSAO is the fallback the camera keeps.
+    let bevy_ssao_ran =
+        bevy_ssao.is_some_and(|id| pipeline_cache.get_compute_pipeline(id.0).is_some());
+    let written = if ao_view.replaces_bevy_ssao() {
+        ours_ready || (failed.any() && bevy_ssao_ran)
+    } else {
+        bevy_ssao_ran
+    };
+    let variant = if written {
+        pipeline.pipeline
+    } else {
+        pipeline.not_written
+    };
     let (Some(size), Some(compute_pipeline)) = (
         camera.physical_viewport_size,
-        pipeline_cache.get_compute_pipeline(pipeline.pipeline),
+        pipeline_cache.get_compute_pipeline(variant),
     ) else {
         return;
     };

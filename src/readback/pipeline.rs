@@ -16,6 +16,7 @@ use bevy::render::{
     renderer::RenderDevice,
     texture::GpuImage,
 };
+use bevy::shader::ShaderDefVal;
 use bevy::utils::default;
 
 use super::AoReadback;
@@ -25,7 +26,10 @@ use crate::view::{DynamicAoTextures, DynamicAoUniform};
 #[derive(Resource)]
 pub(crate) struct ReadbackPipeline {
     layout: BindGroupLayoutDescriptor,
+    /// Copies the view's AO as it is.
     pub(super) pipeline: CachedComputePipelineId,
+    /// Writes −1 for the AO: on frames where nothing wrote the view's AO texture.
+    pub(super) not_written: CachedComputePipelineId,
 }
 
 impl FromWorld for ReadbackPipeline {
@@ -48,16 +52,27 @@ impl FromWorld for ReadbackPipeline {
                 ),
             ),
         );
-        let pipeline =
-            world
-                .resource::<PipelineCache>()
-                .queue_compute_pipeline(ComputePipelineDescriptor {
-                    label: Some("dynamic_ao_readback_pipeline".into()),
-                    layout: vec![layout.clone()],
-                    shader: load_embedded_asset!(world, "readback.wgsl"),
-                    ..default()
-                });
-        Self { layout, pipeline }
+        let shader = load_embedded_asset!(world, "readback.wgsl");
+        let cache = world.resource::<PipelineCache>();
+        let queue = |label: &'static str, shader_defs: Vec<ShaderDefVal>| {
+            cache.queue_compute_pipeline(ComputePipelineDescriptor {
+                label: Some(label.into()),
+                layout: vec![layout.clone()],
+                shader: shader.clone(),
+                shader_defs,
+                ..default()
+            })
+        };
+        let pipeline = queue("dynamic_ao_readback_pipeline", vec![]);
+        let not_written = queue(
+            "dynamic_ao_readback_not_written_pipeline",
+            vec!["AO_NOT_WRITTEN".into()],
+        );
+        Self {
+            layout,
+            pipeline,
+            not_written,
+        }
     }
 }
 

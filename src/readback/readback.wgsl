@@ -23,7 +23,13 @@ fn readback(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = textureLoad(front_depth, pixel, 0);
     // Where no geometry is, nothing is occluded.
     let at = visibility_pixel(settings, pixel, textureDimensions(visibility), dims);
+#ifdef AO_NOT_WRITTEN
+    // Nothing wrote the AO texture this frame (its passes are still compiling): what it holds
+    // is no frame's AO, and the sentinel says so.
+    let open = -1.0;
+#else
     let open = select(textureLoad(visibility, at, 0).r, 1.0, depth <= 0.0);
+#endif
     textureStore(visibility_out, pixel, vec4<f32>(open));
     textureStore(front_out, pixel, vec4<f32>(decode_normal(textureLoad(front_normal, pixel, 0).xyz), depth));
     let back = textureLoad(back_depth, pixel, 0);

@@ -30,6 +30,11 @@ pub const BEVY_SSAO_RADIUS: f32 = 0.73;
 pub const WIDTH: u32 = 160;
 pub const HEIGHT: u32 = 120;
 
+/// Frames [`Gpu::frame_of`] renders at most, once asked, until the AO of the camera's technique
+/// comes back: loading the shaders takes longer while other tests load models on the same task
+/// pool.
+const READBACK_FRAMES: u32 = 600;
+
 /// A scene: meshes with their placement, a camera, and the lights.
 #[derive(Clone)]
 pub struct SceneSpec {
@@ -405,38 +410,43 @@ impl Gpu {
         (camera, readback)
     }
 
-    /// Like [`Gpu::frame`], for any camera with an [`AoReadback`].
+    /// Like [`Gpu::frame`], for any camera with an [`AoReadback`]. A read-back of a frame on
+    /// which nothing wrote the AO yet (visibility −1: a shader still loading, which takes longer
+    /// while other tests load models) is dropped and the next frame read.
     pub fn frame_of(&mut self, camera: Entity, readback: &AoReadback, frames: u32) -> Frame {
         self.update(frames);
-        let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
-        let images = [&readback.visibility, &readback.front, &readback.back];
-        let entities: Vec<Entity> = images
-            .iter()
-            .enumerate()
-            .map(|(slot, image)| {
-                let slots = slots.clone();
-                self.app
-                    .world_mut()
-                    .spawn(Readback::texture((*image).clone()))
-                    .observe(move |done: On<ReadbackComplete>| {
-                        slots.lock().unwrap()[slot].get_or_insert_with(|| done.data.clone());
-                    })
-                    .id()
-            })
-            .collect();
-        for _ in 0..60 {
-            self.app.update();
-            if slots.lock().unwrap().iter().all(Option::is_some) {
-                break;
+        let mut updates = 0;
+        loop {
+            let images = self.read_back_once(readback, &mut updates);
+            // Every pixel reads −1 then; the first says it.
+            let written =
+                f32::from_le_bytes([images[0][0], images[0][1], images[0][2], images[0][3]]) >= 0.0;
+            if written {
+                return self.frame_from_bytes(camera, readback, images);
             }
+            assert!(
+                updates < READBACK_FRAMES,
+                "nothing wrote the camera's AO in {READBACK_FRAMES} frames"
+            );
         }
-        for entity in entities {
-            self.app.world_mut().despawn(entity);
-        }
-        let slots = slots.lock().unwrap().clone();
-        let [Some(visibility), Some(front), Some(back)] = slots else {
-            panic!("the GPU read-back did not complete in 60 frames");
-        };
+    }
+
+    /// The main camera's frame as the next frame's copy holds it, visibility −1 included: what a
+    /// read-back gets on a frame where the AO may not be there yet.
+    pub fn frame_now(&mut self) -> Frame {
+        let (camera, readback) = (self.camera, self.readback.clone());
+        let images = self.read_back_once(&readback, &mut 0);
+        self.frame_from_bytes(camera, &readback, images)
+    }
+
+    /// The read-back's bytes as a [`Frame`] of `camera`.
+    fn frame_from_bytes(
+        &mut self,
+        camera: Entity,
+        readback: &AoReadback,
+        images: [Vec<u8>; 3],
+    ) -> Frame {
+        let [visibility, front, back] = images;
         // The read-back's own size: a camera's viewport may differ from the harness's.
         let size = self
             .app
@@ -462,6 +472,42 @@ impl Gpu {
             },
             view: self.view(camera),
         }
+    }
+
+    /// One read-back of `readback`'s three images, from the first frame that copies them;
+    /// counts the frames it updates in `updates`.
+    fn read_back_once(&mut self, readback: &AoReadback, updates: &mut u32) -> [Vec<u8>; 3] {
+        let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
+        let images = [&readback.visibility, &readback.front, &readback.back];
+        let entities: Vec<Entity> = images
+            .iter()
+            .enumerate()
+            .map(|(slot, image)| {
+                let slots = slots.clone();
+                self.app
+                    .world_mut()
+                    .spawn(Readback::texture((*image).clone()))
+                    .observe(move |done: On<ReadbackComplete>| {
+                        slots.lock().unwrap()[slot].get_or_insert_with(|| done.data.clone());
+                    })
+                    .id()
+            })
+            .collect();
+        while *updates < READBACK_FRAMES {
+            self.app.update();
+            *updates += 1;
+            if slots.lock().unwrap().iter().all(Option::is_some) {
+                break;
+            }
+        }
+        for entity in entities {
+            self.app.world_mut().despawn(entity);
+        }
+        let slots = slots.lock().unwrap().clone();
+        let [Some(visibility), Some(front), Some(back)] = slots else {
+            panic!("the GPU read-back did not complete in {READBACK_FRAMES} frames");
+        };
+        [visibility, front, back]
     }
 
     /// A camera's matrices, as its view uniform holds them.

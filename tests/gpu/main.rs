@@ -25,6 +25,7 @@ mod far_field;
 mod far_scenes;
 mod fields;
 mod fine_detail;
+mod first_frames;
 mod half_resolution;
 mod harness;
 mod horizon;

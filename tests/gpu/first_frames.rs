@@ -1,0 +1,118 @@
+//! A camera's first frames, while the shaders of its passes load and compile: its read-back says
+//! the AO is not there yet (−1) rather than hand over what the texture holds meanwhile (zeros, or
+//! Bevy's SSAO standing in), and what it reads afterwards is the camera's own AO.
+
+use bevy::prelude::*;
+use bevy::shader::Shader;
+
+use bevy_dynamic_ao::prelude::*;
+
+use crate::harness::{Frame, Gpu, largest_difference, plain_ao};
+use crate::scenes;
+
+/// Reads a new camera's frames one by one, for at most `reads`, until one shows the scene as
+/// `reference` does (the same ND-buffer; before that, meshes whose pipelines have not compiled are
+/// missing). Each read-back says the AO is not there yet (−1 everywhere) or is valid visibility,
+/// and on the first frame with the whole scene it is `reference`'s AO: never the zeros of an
+/// unwritten texture, never Bevy's SSAO standing in. Returns the reads that said −1 and the read
+/// that matched.
+fn read_until_the_scene_is_drawn(
+    gpu: &mut Gpu,
+    reference: &Frame,
+    reads: u32,
+    what: &str,
+) -> (u32, u32) {
+    let mut not_yet = 0;
+    for read in 1..=reads {
+        let frame = gpu.frame_now();
+        if frame.visibility.iter().all(|v| *v == -1.0) {
+            not_yet += 1;
+            continue;
+        }
+        assert!(
+            frame.visibility.iter().all(|v| (0.0..=1.0).contains(v)),
+            "{what}: read-back {read} is neither visibility nor −1"
+        );
+        if frame.nd.front != reference.nd.front {
+            continue;
+        }
+        let difference = largest_difference(&frame.visibility, &reference.visibility);
+        println!(
+            "{what}: {not_yet} read-backs said −1; the whole scene at read-back {read}, largest \
+             difference from a camera whose shaders were ready {difference}"
+        );
+        assert!(
+            difference < 1e-4,
+            "{what}: the first AO of the whole scene is not the camera's: {difference}"
+        );
+        return (not_yet, read);
+    }
+    panic!("{what}: the scene was not drawn in {reads} frames");
+}
+
+/// The first frames of a new camera, its shaders loading meanwhile (how many frames that takes
+/// depends on the machine's load: with other tests' apps loading models on the same task pool, it
+/// took more than four).
+#[test]
+fn every_read_back_of_a_new_camera_is_its_ao_or_says_it_is_not_there_yet() {
+    let scene = scenes::cube_on_plane();
+    let reference = Gpu::new(&scene, plain_ao()).frame(8);
+    let mut gpu = Gpu::new(&scene, plain_ao());
+    read_until_the_scene_is_drawn(&mut gpu, &reference, 60, "loading");
+}
+
+/// In a normal app pipelines compile in the background over many frames: Bevy's own and ours, in
+/// any order.
+#[test]
+fn every_read_back_is_valid_while_pipelines_compile_in_the_background() {
+    for technique in [
+        AoTechnique::NearField,
+        AoTechnique::Horizon,
+        AoTechnique::RayMarch,
+    ] {
+        let ao = plain_ao().with_technique(technique);
+        let scene = scenes::cube_on_plane();
+        let reference = Gpu::new(&scene, ao.clone()).frame(4);
+        let mut gpu = Gpu::with_background_compilation(&scene, ao);
+        read_until_the_scene_is_drawn(&mut gpu, &reference, 400, &format!("{technique:?}"));
+    }
+}
+
+/// A pass whose shader is not there (taken out of its assets, as for a moment while a file
+/// reloads) waits to compile rather than fail: meanwhile Bevy's SSAO fills the texture and the
+/// read-back says −1; once the shader is back, so is the camera's own AO.
+#[test]
+fn while_a_pass_waits_for_its_shader_the_read_back_says_so_and_then_returns_the_ao() {
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::new(&scene, plain_ao());
+    let ours = gpu.frame(4);
+    assert!(
+        ours.visibility.iter().any(|v| *v < 0.6),
+        "the scene has no dark crease"
+    );
+    let world = gpu.app.world_mut();
+    let mut shaders = world.resource_mut::<Assets<Shader>>();
+    let (id, compose) = shaders
+        .iter()
+        .find(|(_, shader)| shader.path.ends_with("compose/compose.wgsl"))
+        .map(|(id, shader)| (id, shader.clone()))
+        .expect("the compose shader is loaded");
+    shaders.remove(id);
+    gpu.update(4);
+    let meanwhile = gpu.frame_now().visibility;
+    assert!(
+        meanwhile.iter().all(|v| *v == -1.0),
+        "while compose waits, the read-back should say so: it reads {} to {}",
+        meanwhile.iter().copied().fold(f32::MAX, f32::min),
+        meanwhile.iter().copied().fold(f32::MIN, f32::max)
+    );
+    gpu.app
+        .world_mut()
+        .resource_mut::<Assets<Shader>>()
+        .insert(id, compose)
+        .expect("the shader's slot is live");
+    let after = gpu.frame(2);
+    let difference = largest_difference(&after.visibility, &ours.visibility);
+    println!("with the shader back: largest difference from before {difference}");
+    assert!(difference < 1e-4, "the AO did not come back: {difference}");
+}
