@@ -66,6 +66,7 @@ impl Plugin for ComposePlugin {
                 (
                     (
                         ssao_slot::place_split_screen_textures,
+                        ssao_slot::stand_in_open_textures,
                         ssao_slot::park_msaa_resources,
                     )
                         .chain()

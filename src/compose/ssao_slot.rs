@@ -15,17 +15,26 @@
 //!   viewport, so a viewport that does not start at the target's corner reads outside it. On
 //!   such a view the texture is replaced by one the size of the target, and compose writes at
 //!   the viewport's place in it.
+//!
+//! And until anything writes a view's texture (our passes and Bevy's SSAO both still compiling,
+//! which lasts while their shaders wait on the asset loader), it holds zeros, which PBR reads as
+//! ambient light fully occluded: a black image. On such a frame a texture that reads 1 (open)
+//! stands in; whichever pass compiles first writes into it.
 
 use bevy::camera::{Camera, Camera3d};
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
-use bevy::pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionResources};
+use bevy::pbr::{
+    ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionResources, SsaoPipelineId,
+};
 use bevy::platform::collections::HashMap;
 use bevy::render::{
     Extract,
     camera::ExtractedCamera,
-    render_resource::TextureUsages,
-    renderer::{RenderAdapter, RenderDevice},
+    render_resource::{
+        Extent3d, PipelineCache, TexelCopyBufferLayout, TextureFormat, TextureUsages,
+    },
+    renderer::{RenderAdapter, RenderDevice, RenderQueue},
     sync_world::RenderEntity,
     texture::{CachedTexture, TextureCache},
     view::Msaa,
@@ -141,6 +150,68 @@ pub(crate) fn place_split_screen_textures(
             bevy_ssao_format(&adapter),
             TextureUsages::STORAGE_BINDING | TextureUsages::TEXTURE_BINDING,
         );
+    }
+}
+
+/// Whether Bevy's SSAO pass can run on a view this frame: it has the pipeline id and the pipeline
+/// has compiled.
+pub(crate) fn bevy_ssao_runs(id: Option<&SsaoPipelineId>, cache: &PipelineCache) -> bool {
+    id.is_some_and(|id| cache.get_compute_pipeline(id.0).is_some())
+}
+
+/// Where nothing will write a view's texture this frame (see the module's docs), puts one that
+/// reads 1 in its place. Our passes count as writing from the frame after they were all ready;
+/// on the frame they become ready they write into the stand-in.
+pub(crate) fn stand_in_open_textures(
+    mut texture_cache: ResMut<TextureCache>,
+    render_device: Res<RenderDevice>,
+    render_queue: Res<RenderQueue>,
+    pipeline_cache: Res<PipelineCache>,
+    mut views: Query<(
+        &DynamicAoView,
+        Has<AoPassesReady>,
+        Option<&SsaoPipelineId>,
+        &mut ScreenSpaceAmbientOcclusionResources,
+    )>,
+) {
+    for (view, ours_ready, bevy_ssao, mut resources) in &mut views {
+        let ours = view.replaces_bevy_ssao() && ours_ready;
+        if ours || bevy_ssao_runs(bevy_ssao, &pipeline_cache) {
+            continue;
+        }
+        let texture = &resources.screen_space_ambient_occlusion_texture.texture;
+        let (size, format) = (texture.size(), texture.format());
+        // 1.0 as a half float is 0x3c00.
+        let (f16_one, f32_one) = (0x3c00u16.to_le_bytes(), 1.0f32.to_le_bytes());
+        let one: &[u8] = match format {
+            TextureFormat::R16Float => &f16_one,
+            _ => &f32_one,
+        };
+        let stand_in = view_texture(
+            &mut texture_cache,
+            &render_device,
+            "dynamic_ao_open_visibility",
+            UVec2::new(size.width, size.height),
+            format,
+            TextureUsages::STORAGE_BINDING
+                | TextureUsages::TEXTURE_BINDING
+                | TextureUsages::COPY_DST,
+        );
+        let texels = one.repeat((size.width * size.height) as usize);
+        render_queue.write_texture(
+            stand_in.texture.as_image_copy(),
+            &texels,
+            TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(size.width * one.len() as u32),
+                rows_per_image: None,
+            },
+            Extent3d {
+                depth_or_array_layers: 1,
+                ..size
+            },
+        );
+        resources.screen_space_ambient_occlusion_texture = stand_in;
     }
 }
 

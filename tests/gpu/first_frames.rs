@@ -7,7 +7,10 @@ use bevy::shader::Shader;
 
 use bevy_dynamic_ao::prelude::*;
 
-use crate::harness::{Frame, Gpu, largest_difference, plain_ao};
+use bevy::camera::RenderTarget;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+
+use crate::harness::{Frame, Gpu, HEIGHT, WIDTH, largest_difference, plain_ao};
 use crate::scenes;
 
 /// Reads a new camera's frames one by one, for at most `reads`, until one shows the scene as
@@ -115,4 +118,76 @@ fn while_a_pass_waits_for_its_shader_the_read_back_says_so_and_then_returns_the_
     let difference = largest_difference(&after.visibility, &ours.visibility);
     println!("with the shader back: largest difference from before {difference}");
     assert!(difference < 1e-4, "the AO did not come back: {difference}");
+}
+
+/// A camera of its own rendering `transform` into a new target, with `ao` if given; the target.
+fn spawn_lit_camera(gpu: &mut Gpu, transform: Transform, ao: Option<DynamicAo>) -> Handle<Image> {
+    let world = gpu.app.world_mut();
+    let target = world
+        .resource_mut::<Assets<Image>>()
+        .add(Image::new_target_texture(
+            WIDTH,
+            HEIGHT,
+            bevy::render::render_resource::TextureFormat::Rgba8UnormSrgb,
+            None,
+        ));
+    let mut camera = world.spawn((
+        Camera3d::default(),
+        transform,
+        Msaa::Off,
+        Tonemapping::None,
+        RenderTarget::Image(target.clone().into()),
+        AmbientLight {
+            brightness: 2000.0,
+            ..default()
+        },
+    ));
+    if let Some(ao) = ao {
+        camera.insert(ao);
+    }
+    target
+}
+
+/// Until anything writes a new camera's AO (its passes and Bevy's SSAO both waiting for their
+/// shaders, as while a game loads its assets), the camera is lit as one without AO, not with its
+/// ambient light gone.
+#[test]
+fn a_camera_whose_ao_nothing_writes_yet_is_lit_as_one_without_ao() {
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::new(&scene, plain_ao());
+    gpu.frame(4);
+    let world = gpu.app.world_mut();
+    let mut shaders = world.resource_mut::<Assets<Shader>>();
+    let waiting: Vec<_> = shaders
+        .iter()
+        .filter(|(_, shader)| {
+            shader.path.ends_with("compose/compose.wgsl") || shader.path.ends_with("ssao/ssao.wgsl")
+        })
+        .map(|(id, _)| id)
+        .collect();
+    assert_eq!(waiting.len(), 2, "compose's and Bevy's SSAO's shaders");
+    for id in waiting {
+        shaders.remove(id);
+    }
+    let with_ao = spawn_lit_camera(&mut gpu, scene.camera, Some(plain_ao()));
+    let without = spawn_lit_camera(&mut gpu, scene.camera, None);
+    let size = UVec2::new(WIDTH, HEIGHT);
+    let lit = gpu.color_of(with_ao, size, 4);
+    let reference = gpu.color_of(without, size, 0);
+    let luminance = |image: &[Vec3]| image.iter().map(|c| c.y).sum::<f32>() / image.len() as f32;
+    let worst = lit
+        .iter()
+        .zip(&reference)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0, f32::max);
+    println!(
+        "nothing writes the AO: mean {:.4} against {:.4} without AO, largest difference {worst:.4}",
+        luminance(&lit),
+        luminance(&reference)
+    );
+    // Measured 0; before the stand-in, 0.55 (mean luminance 0.007 against 0.403: black).
+    assert!(
+        worst < 1e-3,
+        "the camera should be lit as without AO: largest difference {worst}"
+    );
 }
