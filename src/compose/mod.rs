@@ -23,7 +23,7 @@ mod ssao_slot;
 
 pub(crate) use failed::FailedPipelines;
 pub(crate) use pipeline::bevy_ssao_format;
-pub(crate) use ssao_slot::{ParkedSsao, visibility_texture};
+pub(crate) use ssao_slot::{ParkedSsao, bevy_ssao_runs, visibility_texture};
 
 use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
