@@ -145,13 +145,18 @@ fn clip_edge(
 }
 
 // The outward unit normal of the face across box axis `i` (half-extent vector `a`), with `b` and
-// `c` the other two: a flat box has a zero axis, its face normal is then b × c.
+// `c` the other two. The face spans `b` and `c`, so its normal is b × c, turned to `a`'s side: a
+// box moved by a skinned mesh's joints is sheared, `a` then leans off the normal, and a receiver
+// on the face judged by `a` came out in front of a face that passes through it, which Lambert's
+// formula then counts as a whole hemisphere (black pixels on the Fox's chest). A flat box has a
+// zero `a`; a face with no area, a zero normal (nothing stands in front of it).
 fn face_normal(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
-    let length_a = length(a);
-    if length_a > 0.0 {
-        return a / length_a;
+    let g = cross(b, c);
+    let length_g = length(g);
+    if length_g <= 0.0 {
+        return vec3<f32>(0.0);
     }
-    return normalize(cross(b, c));
+    return g * (select(1.0, -1.0, dot(g, a) < 0.0) / length_g);
 }
 
 // The cap of the sphere (`centre`, `radius`) whose rays from `p` meet it within `reach`.
