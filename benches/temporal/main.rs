@@ -3,7 +3,9 @@
 //!
 //! `cargo bench --profile dev --bench temporal` (`-- --frames N`: consecutive frames of the
 //! still-camera table, default 16; `-- --only still` or `-- --only motion` for one table;
-//! `-- --config TEXT` for the configurations whose name holds TEXT).
+//! `-- --config TEXT` for the configurations whose name holds TEXT). Each configuration's frames
+//! count from the first frame its AO is written (`scene::wait_until_written`): until its shaders
+//! have loaded and compiled, `AoReadback` reads −1, which no table counts.
 //!
 //! - **Still camera** (`still.rs`): a floor, a box and a ball. Flicker: mean |AO_t − AO_{t−1}|
 //!   over the pixels that show geometry, once every configuration has converged, and the same for

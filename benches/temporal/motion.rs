@@ -176,6 +176,7 @@ fn measure(configuration: &Configuration) -> Measured {
             break;
         }
     }
+    scene::wait_until_written(&mut app, &view);
     set_paused(&mut app, false);
     for _ in 0..WARM_UP {
         app.update();

@@ -119,9 +119,34 @@ pub fn read_next_then(
         .collect()
 }
 
-/// Visibility as read back.
+/// Visibility as read back. Panics on a frame whose AO was not yet its technique's (every pixel
+/// −1, `AoReadback`): a table must not count it as an error or a flicker.
 pub fn visibility(data: &[u8]) -> Vec<f32> {
-    common::unpad_f32(data, SIZE.x as usize, SIZE.y as usize, 1)
+    let visibility = common::unpad_f32(data, SIZE.x as usize, SIZE.y as usize, 1);
+    assert!(
+        !not_written(&visibility),
+        "a frame read before the AO was written (its passes had not compiled): wait with \
+         `wait_until_written` first"
+    );
+    visibility
+}
+
+/// `AoReadback` marks a frame whose AO its technique has not written yet with −1 on every pixel.
+fn not_written(visibility: &[f32]) -> bool {
+    visibility.iter().all(|&v| v == -1.0)
+}
+
+/// Updates `app` until the AO of `view` is its technique's, so that the frames a table counts
+/// from then on (to converge, to warm up) are frames of AO, however long the shaders took to load.
+pub fn wait_until_written(app: &mut App, view: &View) {
+    for _ in 0..600 {
+        let data = read_next(app, std::slice::from_ref(&view.readback.visibility));
+        let visibility = common::unpad_f32(&data[0], SIZE.x as usize, SIZE.y as usize, 1);
+        if !not_written(&visibility) {
+            return;
+        }
+    }
+    panic!("the AO of the camera was not written within 600 frames");
 }
 
 /// Pixels where the front layer of an ND-buffer read-back saw geometry.

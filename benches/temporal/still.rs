@@ -42,6 +42,7 @@ fn flicker(configuration: &Configuration, frames: u32) -> (f64, f64, usize) {
         configuration,
         Transform::from_xyz(2.0, 1.8, 2.8).looking_at(Vec3::new(0.0, 0.35, 0.0), Vec3::Y),
     );
+    scene::wait_until_written(&mut app, &view);
     for _ in 0..CONVERGE_FRAMES {
         app.update();
     }
