@@ -192,6 +192,12 @@ def main(path, scene="ring"):
 
 
 if __name__ == "__main__":
+    if any(a in ("-h", "--help") for a in sys.argv[1:]):
+        print(__doc__)
+        sys.exit(0)
     flags = [a for a in sys.argv[1:] if a in ("--blob", "--fins")]
     paths = [a for a in sys.argv[1:] if a not in flags]
+    unknown = [a for a in paths if a.startswith("-")]
+    if unknown or len(paths) > 1:
+        sys.exit(f"usage: ring_on_floor.py [OUT.glb] [--blob | --fins]; got {' '.join(sys.argv[1:])}")
     main(paths[0] if paths else "ring_on_floor.glb", flags[0][2:] if flags else "ring")
