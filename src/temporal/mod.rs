@@ -42,7 +42,8 @@
 //!   a frame").
 //! - **Reset.** The history is dropped on resize (its textures are made again), when any other
 //!   setting of the camera changes, when [`AoTemporal::reset`] is set (camera cuts), and where
-//!   the camera has no motion vectors yet.
+//!   the camera has no motion vectors yet, and on every frame before all of the view's passes run
+//!   (while shaders load or reload, Bevy's SSAO stands in and no image shows the history).
 //!
 //! The history lives in two textures per view (read one, write the other, swapped every frame),
 //! kept across frames on the render-world view and made again only when the view's size changes.

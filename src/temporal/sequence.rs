@@ -3,13 +3,16 @@
 //! Counted per view, not from the app's frame count, so that a still camera converges to the
 //! same image however many frames the app ran before the camera got its AO or its settings last
 //! changed: two captures of one view that accumulate the same number of frames are equal, with
-//! or without MSAA.
+//! or without MSAA. Nor does it count the frames before all of the view's passes run (shaders
+//! still loading or reloading): the history is dropped on those, and the sequence starts with
+//! it on the first frame the view's AO is shown.
 
 use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::render::camera::ExtractedCamera;
 
 use super::view::history_key;
+use crate::compose::AoPassesReady;
 use crate::settings::DynamicAo;
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
@@ -22,7 +25,8 @@ pub(crate) struct TemporalSequence {
 }
 
 /// Counts each accumulating view's frames, starting over where its history does (a reset, new
-/// settings, a new size), and gives the count to its uniform.
+/// settings, a new size, a frame before all its passes have run), and gives the count to its
+/// uniform.
 pub(crate) fn advance_sequences(
     mut commands: Commands,
     mut views: Query<(
@@ -31,9 +35,10 @@ pub(crate) fn advance_sequences(
         &ExtractedCamera,
         &mut DynamicAoUniform,
         Option<&mut TemporalSequence>,
+        Has<AoPassesReady>,
     )>,
 ) {
-    for (entity, view, camera, mut uniform, sequence) in &mut views {
+    for (entity, view, camera, mut uniform, sequence, passes_ready) in &mut views {
         // Extraction leaves 0 where nothing accumulates.
         if uniform.frame_index == 0 {
             continue;
@@ -42,7 +47,8 @@ pub(crate) fn advance_sequences(
         let size = camera.physical_viewport_size;
         match sequence {
             Some(mut sequence)
-                if !view.settings.temporal.reset
+                if passes_ready
+                    && !view.settings.temporal.reset
                     && sequence.size == size
                     && sequence.settings == settings =>
             {

@@ -2,6 +2,7 @@
 //! frame, and whether the history is dropped (whether the pass has compiled is counted in
 //! `node.rs`).
 
+use crate::compose::AoPassesReady;
 use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::image::ToExtents;
@@ -53,6 +54,10 @@ pub(crate) struct HistoryFrame<'a> {
     pub settings: &'a DynamicAo,
     /// Whether the view has motion vectors: without them the history is dropped.
     pub motion_vectors: bool,
+    /// Whether all of the view's passes ran last frame (it carries `AoPassesReady`). Until they
+    /// have, the history is dropped every frame: it would hold frames that no image showed, and
+    /// run ahead of the view's sequence, which starts over then too.
+    pub passes_ready: bool,
     /// Under the ray march's checkerboard, the view's place in its sample sequence
     /// (`DynamicAoUniform::frame_index`), which says the texels marched this frame; 0 where every
     /// texel is.
@@ -72,7 +77,7 @@ impl TemporalHistory {
     }
 
     /// Whether the image-space history is clamped this frame: on the frames that read texture 0,
-    /// every other frame (why: the module's docs, "Ghosting").
+    /// every other frame from the last reset (why: the module's docs, "Ghosting").
     pub(super) fn clamps(&self) -> bool {
         self.read == 0
     }
@@ -94,7 +99,7 @@ impl TemporalHistory {
         frame: HistoryFrame,
     ) -> Option<TemporalHistory> {
         let key = history_key(frame.settings);
-        let reset = frame.settings.temporal.reset || !frame.motion_vectors;
+        let reset = frame.settings.temporal.reset || !frame.motion_vectors || !frame.passes_ready;
         let uniform = |reset: bool| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
@@ -103,8 +108,10 @@ impl TemporalHistory {
         };
         match history {
             Some(history) if history.size == frame.size => {
-                history.read = 1 - history.read;
                 let reset = reset || history.settings != key;
+                // Counted from the reset, as the view's sequence is, so that the frames that clamp
+                // are the same ones in every capture that accumulates the same frames.
+                history.read = if reset { 0 } else { 1 - history.read };
                 history.settings = key;
                 history.uniform.set(uniform(reset));
                 history.uniform.write_buffer(device, queue);
@@ -163,16 +170,17 @@ pub(crate) fn prepare_history(
         Option<FrontLayer>,
         Option<&mut TemporalHistory>,
         Option<&DynamicAoUniform>,
+        Has<AoPassesReady>,
     )>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
     // What last frame left; this frame's new and dropped histories count from the next.
     let bytes = views
         .iter()
-        .filter_map(|(.., history, _)| history.map(TemporalHistory::bytes))
+        .filter_map(|(.., history, _, _)| history.map(TemporalHistory::bytes))
         .sum();
     memory.report("temporal", bytes);
-    for (entity, view, textures, prepass, history, ao_uniform) in &mut views {
+    for (entity, view, textures, prepass, history, ao_uniform, passes_ready) in &mut views {
         let (true, Some(textures)) = (view.temporal, textures) else {
             if history.is_some() {
                 commands.entity(entity).remove::<TemporalHistory>();
@@ -185,6 +193,7 @@ pub(crate) fn prepare_history(
             scale: if view.half_resolution { 2 } else { 1 },
             settings: &view.settings,
             motion_vectors: prepass.is_some_and(|p| p.motion_vectors().is_some()),
+            passes_ready,
             frame: match view.checkerboard {
                 true => ao_uniform.map_or(0, |u| u.frame_index),
                 false => 0,

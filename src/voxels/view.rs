@@ -1,6 +1,7 @@
 //! The per-view state of voxel volumes: whether any exist and their occlusion buffers (whether
 //! their passes have compiled is counted in `node.rs`).
 
+use crate::compose::AoPassesReady;
 use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::render::{
@@ -74,16 +75,17 @@ pub(crate) fn prepare_voxel_textures(
         &mut FarFieldOutputs,
         Option<FrontLayer>,
         Option<&mut VoxelHistory>,
+        Has<AoPassesReady>,
     )>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
     // What last frame left; this frame's new and dropped histories count from the next.
     let bytes = views
         .iter()
-        .filter_map(|(.., history)| history.map(|h| h.0.bytes()))
+        .filter_map(|(.., history, _)| history.map(|h| h.0.bytes()))
         .sum();
     memory.report("voxel temporal", bytes);
-    for (entity, camera, view, mut outputs, prepass, history) in &mut views {
+    for (entity, camera, view, mut outputs, prepass, history, passes_ready) in &mut views {
         let (true, Some(size)) = (view.has(FarTerm::Voxels), view_size(camera)) else {
             commands
                 .entity(entity)
@@ -115,6 +117,7 @@ pub(crate) fn prepare_voxel_textures(
                 motion_vectors: prepass
                     .as_ref()
                     .is_some_and(|p| p.motion_vectors().is_some()),
+                passes_ready,
                 frame: 0,
             };
             let history = history.map(|h| &mut h.into_inner().0);

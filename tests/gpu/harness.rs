@@ -208,7 +208,9 @@ pub struct Gpu {
     pub app: App,
     _turn: RwLockReadGuard<'static, ()>,
     pub camera: Entity,
-    readback: AoReadback,
+    pub readback: AoReadback,
+    /// Cameras whose AO a read-back has shown.
+    shown: Vec<Entity>,
 }
 
 impl Gpu {
@@ -327,6 +329,7 @@ impl Gpu {
                 front: Handle::default(),
                 back: Handle::default(),
             },
+            shown: Vec::new(),
         };
         let (camera, readback) = gpu.add_camera(scene.camera, ao);
         gpu.app.world_mut().entity_mut(camera).insert(AmbientLight {
@@ -413,8 +416,28 @@ impl Gpu {
     /// Like [`Gpu::frame`], for any camera with an [`AoReadback`]. A read-back of a frame on
     /// which nothing wrote the AO yet (visibility −1: a shader still loading, which takes longer
     /// while other tests load models) is dropped and the next frame read.
+    ///
+    /// On a camera's first call the `frames` count from the first frame after its AO was first
+    /// read back, where an accumulating camera's history starts over: it then holds the same
+    /// frames, of the same sequence, however long its shaders took to load (its history starts
+    /// on the first frame its AO is shown, which a read-back sees a frame or two late).
     pub fn frame_of(&mut self, camera: Entity, readback: &AoReadback, frames: u32) -> Frame {
+        if !self.shown.contains(&camera) {
+            self.read_until_written(readback);
+            self.shown.push(camera);
+            if let Some(mut ao) = self.app.world_mut().get_mut::<DynamicAo>(camera)
+                && ao.temporal.enabled
+            {
+                ao.temporal.reset = true;
+            }
+        }
         self.update(frames);
+        let images = self.read_until_written(readback);
+        self.frame_from_bytes(camera, readback, images)
+    }
+
+    /// The first read-back of `readback` on which the AO is written.
+    fn read_until_written(&mut self, readback: &AoReadback) -> [Vec<u8>; 3] {
         let mut updates = 0;
         loop {
             let images = self.read_back_once(readback, &mut updates);
@@ -422,7 +445,7 @@ impl Gpu {
             let written =
                 f32::from_le_bytes([images[0][0], images[0][1], images[0][2], images[0][3]]) >= 0.0;
             if written {
-                return self.frame_from_bytes(camera, readback, images);
+                return images;
             }
             assert!(
                 updates < READBACK_FRAMES,
@@ -437,6 +460,44 @@ impl Gpu {
         let (camera, readback) = (self.camera, self.readback.clone());
         let images = self.read_back_once(&readback, &mut 0);
         self.frame_from_bytes(camera, &readback, images)
+    }
+
+    /// The visibility of each of `readbacks` (cameras of the harness's size) read back from one
+    /// frame, −1 included where the AO is not there yet: for comparing cameras frame for frame.
+    pub fn visibility_of_each_now(&mut self, readbacks: &[&AoReadback]) -> Vec<Vec<f32>> {
+        let slots: Arc<Mutex<Vec<Option<Vec<u8>>>>> =
+            Arc::new(Mutex::new(vec![None; readbacks.len()]));
+        let entities: Vec<Entity> = readbacks
+            .iter()
+            .enumerate()
+            .map(|(slot, readback)| {
+                let slots = slots.clone();
+                self.app
+                    .world_mut()
+                    .spawn(Readback::texture(readback.visibility.clone()))
+                    .observe(move |done: On<ReadbackComplete>| {
+                        slots.lock().unwrap()[slot].get_or_insert_with(|| done.data.clone());
+                    })
+                    .id()
+            })
+            .collect();
+        for _ in 0..READBACK_FRAMES {
+            self.app.update();
+            if slots.lock().unwrap().iter().all(Option::is_some) {
+                break;
+            }
+        }
+        for entity in entities {
+            self.app.world_mut().despawn(entity);
+        }
+        let slots = slots.lock().unwrap().clone();
+        slots
+            .into_iter()
+            .map(|data| {
+                let data = data.expect("the GPU read-back did not complete");
+                common::unpad_f32(&data, WIDTH as usize, HEIGHT as usize, 1)
+            })
+            .collect()
     }
 
     /// The read-back's bytes as a [`Frame`] of `camera`.

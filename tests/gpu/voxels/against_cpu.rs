@@ -217,9 +217,9 @@ fn an_accumulating_camera_blurs_the_voxel_term_by_its_accumulated_radius() {
     let run = |ao: DynamicAo| {
         let mut gpu = Gpu::new(&scene, ao);
         corner_volume(&mut gpu, 4, 4);
-        // A view's sequence counts from its first frame, its history from the first frame its
-        // passes run; where shaders load late (other tests loading models meanwhile), the two
-        // part by a few frames, differently in each app.
+        // Where shaders load late (other tests loading models meanwhile), the AO is first shown
+        // a few frames later in one app than in another: started over once it is shown, the
+        // three histories hold the same number of frames when read.
         gpu.frame(1);
         gpu.set_ao(|ao| ao.temporal.reset = true);
         gpu.frame(8)
