@@ -46,7 +46,7 @@ fn deforming_characters_renders_headless() {
         let mut args = vec![
             "--headless",
             "--frames",
-            "12",
+            "30",
             "--width",
             "160",
             "--height",
@@ -86,7 +86,10 @@ fn deforming_characters_renders_headless() {
         "deforming_characters debug view: {cast} pixels darker with 4 walkers than with 1, \
          {lost} lighter"
     );
-    // Measured: 205–213 darker, 18–32 lighter.
+    // Measured at frame 30: 249 darker, 67 lighter, with another test process beside it. At frame
+    // 12 CI once read 308 and 202: the frames `--frames` counts begin when the app starts, and
+    // where the shaders load late under load the AO is shown, and its history begins, only a few
+    // frames before the capture.
     assert!(
         cast > 150 && cast > 3 * lost,
         "the walkers should cast occlusion ({cast} darker, {lost} lighter)"

@@ -3,7 +3,6 @@
 //! Bevy's SSAO standing in), and what it reads afterwards is the camera's own AO.
 
 use bevy::prelude::*;
-use bevy::shader::Shader;
 
 use bevy_dynamic_ao::prelude::*;
 
@@ -93,14 +92,7 @@ fn while_a_pass_waits_for_its_shader_the_read_back_says_so_and_then_returns_the_
         ours.visibility.iter().any(|v| *v < 0.6),
         "the scene has no dark crease"
     );
-    let world = gpu.app.world_mut();
-    let mut shaders = world.resource_mut::<Assets<Shader>>();
-    let (id, compose) = shaders
-        .iter()
-        .find(|(_, shader)| shader.path.ends_with("compose/compose.wgsl"))
-        .map(|(id, shader)| (id, shader.clone()))
-        .expect("the compose shader is loaded");
-    shaders.remove(id);
+    let compose = gpu.take_shader("compose/compose.wgsl");
     gpu.update(4);
     let meanwhile = gpu.frame_now().visibility;
     assert!(
@@ -109,11 +101,7 @@ fn while_a_pass_waits_for_its_shader_the_read_back_says_so_and_then_returns_the_
         meanwhile.iter().copied().fold(f32::MAX, f32::min),
         meanwhile.iter().copied().fold(f32::MIN, f32::max)
     );
-    gpu.app
-        .world_mut()
-        .resource_mut::<Assets<Shader>>()
-        .insert(id, compose)
-        .expect("the shader's slot is live");
+    gpu.restore_shader(compose);
     let after = gpu.frame(2);
     let difference = largest_difference(&after.visibility, &ours.visibility);
     println!("with the shader back: largest difference from before {difference}");
@@ -156,19 +144,9 @@ fn a_camera_whose_ao_nothing_writes_yet_is_lit_as_one_without_ao() {
     let scene = scenes::cube_on_plane();
     let mut gpu = Gpu::new(&scene, plain_ao());
     gpu.frame(4);
-    let world = gpu.app.world_mut();
-    let mut shaders = world.resource_mut::<Assets<Shader>>();
-    let waiting: Vec<_> = shaders
-        .iter()
-        .filter(|(_, shader)| {
-            shader.path.ends_with("compose/compose.wgsl") || shader.path.ends_with("ssao/ssao.wgsl")
-        })
-        .map(|(id, _)| id)
-        .collect();
-    assert_eq!(waiting.len(), 2, "compose's and Bevy's SSAO's shaders");
-    for id in waiting {
-        shaders.remove(id);
-    }
+    // Compose's and Bevy's SSAO's shaders, kept out for the rest of the test.
+    gpu.take_shader("compose/compose.wgsl");
+    gpu.take_shader("ssao/ssao.wgsl");
     let with_ao = spawn_lit_camera(&mut gpu, scene.camera, Some(plain_ao()));
     let without = spawn_lit_camera(&mut gpu, scene.camera, None);
     let size = UVec2::new(WIDTH, HEIGHT);

@@ -13,6 +13,7 @@ use bevy::render::{
     settings::{RenderCreation, WgpuLimits, WgpuSettings},
     view::screenshot::{Screenshot, ScreenshotCaptured},
 };
+use bevy::shader::Shader;
 use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
@@ -365,6 +366,29 @@ impl Gpu {
         change(&mut ao);
     }
 
+    /// Takes the shader whose path ends with `path` out of the app's assets, as for a moment
+    /// while its file reloads: the pipelines that use it wait to compile until
+    /// [`Gpu::restore_shader`] puts it back.
+    pub fn take_shader(&mut self, path: &str) -> (AssetId<Shader>, Shader) {
+        let mut shaders = self.app.world_mut().resource_mut::<Assets<Shader>>();
+        let (id, shader) = shaders
+            .iter()
+            .find(|(_, shader)| shader.path.ends_with(path))
+            .map(|(id, shader)| (id, shader.clone()))
+            .unwrap_or_else(|| panic!("no shader {path} is loaded"));
+        shaders.remove(id);
+        (id, shader)
+    }
+
+    /// Puts back a shader [`Gpu::take_shader`] took.
+    pub fn restore_shader(&mut self, (id, shader): (AssetId<Shader>, Shader)) {
+        self.app
+            .world_mut()
+            .resource_mut::<Assets<Shader>>()
+            .insert(id, shader)
+            .expect("the shader's slot is live");
+    }
+
     pub fn update(&mut self, frames: u32) {
         for _ in 0..frames {
             self.app.update();
@@ -465,38 +489,10 @@ impl Gpu {
     /// The visibility of each of `readbacks` (cameras of the harness's size) read back from one
     /// frame, −1 included where the AO is not there yet: for comparing cameras frame for frame.
     pub fn visibility_of_each_now(&mut self, readbacks: &[&AoReadback]) -> Vec<Vec<f32>> {
-        let slots: Arc<Mutex<Vec<Option<Vec<u8>>>>> =
-            Arc::new(Mutex::new(vec![None; readbacks.len()]));
-        let entities: Vec<Entity> = readbacks
+        let images: Vec<&Handle<Image>> = readbacks.iter().map(|r| &r.visibility).collect();
+        self.read_images_once(&images, &mut 0)
             .iter()
-            .enumerate()
-            .map(|(slot, readback)| {
-                let slots = slots.clone();
-                self.app
-                    .world_mut()
-                    .spawn(Readback::texture(readback.visibility.clone()))
-                    .observe(move |done: On<ReadbackComplete>| {
-                        slots.lock().unwrap()[slot].get_or_insert_with(|| done.data.clone());
-                    })
-                    .id()
-            })
-            .collect();
-        for _ in 0..READBACK_FRAMES {
-            self.app.update();
-            if slots.lock().unwrap().iter().all(Option::is_some) {
-                break;
-            }
-        }
-        for entity in entities {
-            self.app.world_mut().despawn(entity);
-        }
-        let slots = slots.lock().unwrap().clone();
-        slots
-            .into_iter()
-            .map(|data| {
-                let data = data.expect("the GPU read-back did not complete");
-                common::unpad_f32(&data, WIDTH as usize, HEIGHT as usize, 1)
-            })
+            .map(|data| common::unpad_f32(data, WIDTH as usize, HEIGHT as usize, 1))
             .collect()
     }
 
@@ -538,8 +534,17 @@ impl Gpu {
     /// One read-back of `readback`'s three images, from the first frame that copies them;
     /// counts the frames it updates in `updates`.
     fn read_back_once(&mut self, readback: &AoReadback, updates: &mut u32) -> [Vec<u8>; 3] {
-        let slots: Arc<Mutex<[Option<Vec<u8>>; 3]>> = Arc::default();
         let images = [&readback.visibility, &readback.front, &readback.back];
+        self.read_images_once(&images, updates)
+            .try_into()
+            .expect("three images")
+    }
+
+    /// One read-back of each of `images`, all from the first frame that copies them; counts the
+    /// frames it updates in `updates`.
+    fn read_images_once(&mut self, images: &[&Handle<Image>], updates: &mut u32) -> Vec<Vec<u8>> {
+        let slots: Arc<Mutex<Vec<Option<Vec<u8>>>>> =
+            Arc::new(Mutex::new(vec![None; images.len()]));
         let entities: Vec<Entity> = images
             .iter()
             .enumerate()
@@ -565,10 +570,14 @@ impl Gpu {
             self.app.world_mut().despawn(entity);
         }
         let slots = slots.lock().unwrap().clone();
-        let [Some(visibility), Some(front), Some(back)] = slots else {
-            panic!("the GPU read-back did not complete in {READBACK_FRAMES} frames");
-        };
-        [visibility, front, back]
+        slots
+            .into_iter()
+            .map(|data| {
+                data.unwrap_or_else(|| {
+                    panic!("the GPU read-back did not complete in {READBACK_FRAMES} frames")
+                })
+            })
+            .collect()
     }
 
     /// A camera's matrices, as its view uniform holds them.

@@ -238,22 +238,11 @@ fn a_camera_whose_shaders_load_late_accumulates_what_a_running_one_does() {
             ));
         }
         gpu.frame(4);
-        let world = gpu.app.world_mut();
-        let mut shaders = world.resource_mut::<Assets<bevy::shader::Shader>>();
-        let (id, compose) = shaders
-            .iter()
-            .find(|(_, shader)| shader.path.ends_with("compose/compose.wgsl"))
-            .map(|(id, shader)| (id, shader.clone()))
-            .expect("the compose shader is loaded");
-        shaders.remove(id);
+        let compose = gpu.take_shader("compose/compose.wgsl");
         gpu.update(3);
         let (_, late) = gpu.add_camera(scene.camera, DynamicAo::default());
         gpu.update(5);
-        gpu.app
-            .world_mut()
-            .resource_mut::<Assets<bevy::shader::Shader>>()
-            .insert(id, compose)
-            .expect("the shader's slot is live");
+        gpu.restore_shader(compose);
         let running = gpu.readback.clone();
         let mut compared = 0;
         let mut largest = 0.0f32;
