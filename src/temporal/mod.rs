@@ -61,6 +61,7 @@ pub mod settings;
 mod view;
 
 pub(crate) use pipeline::{AccumulationTextures, Channels, TemporalPipeline};
+pub(crate) use sequence::started_over;
 pub(crate) use view::{HistoryFrame, TemporalHistory};
 
 use bevy::app::{App, Plugin, PostUpdate};

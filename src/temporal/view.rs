@@ -1,8 +1,7 @@
 //! The per-view state of temporal accumulation: the two history textures, which one is read this
-//! frame, and whether the history is dropped (whether the pass has compiled is counted in
-//! `node.rs`).
+//! frame, and whether the history is dropped (when is the view's sequence's to say, in
+//! `sequence.rs`; whether the pass has compiled is counted in `node.rs`).
 
-use crate::compose::AoPassesReady;
 use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::image::ToExtents;
@@ -15,6 +14,7 @@ use bevy::render::{
     renderer::{RenderDevice, RenderQueue},
 };
 
+use super::sequence::started_over;
 use crate::memory::DynamicAoGpuMemory;
 use crate::settings::DynamicAo;
 use crate::view::{DynamicAoTextures, DynamicAoUniform, DynamicAoView};
@@ -39,8 +39,6 @@ pub(crate) struct TemporalHistory {
     textures: [(Texture, TextureView); 2],
     /// Which texture is read this frame; the other is written.
     read: usize,
-    /// The camera's settings last frame: any change drops the history.
-    settings: DynamicAo,
     pub(super) uniform: UniformBuffer<TemporalUniform>,
 }
 
@@ -52,12 +50,12 @@ pub(crate) struct HistoryFrame<'a> {
     pub scale: u32,
     /// The camera's settings this frame.
     pub settings: &'a DynamicAo,
-    /// Whether the view has motion vectors: without them the history is dropped.
+    /// Whether the view's sequence started over this frame ([`super::sequence::started_over`]):
+    /// the history starts over with it, so that the two never disagree on where it began.
+    pub started_over: bool,
+    /// Whether the view has motion vectors: without them the history is dropped (and the
+    /// sequence goes on, since the sample pattern does not need them).
     pub motion_vectors: bool,
-    /// Whether all of the view's passes ran last frame (it carries `AoPassesReady`). Until they
-    /// have, the history is dropped every frame: it would hold frames that no image showed, and
-    /// run ahead of the view's sequence, which starts over then too.
-    pub passes_ready: bool,
     /// Under the ray march's checkerboard, the view's place in its sample sequence
     /// (`DynamicAoUniform::frame_index`), which says the texels marched this frame; 0 where every
     /// texel is.
@@ -90,16 +88,15 @@ impl TemporalHistory {
     }
 
     /// Moves `history` on by a frame: swaps its textures and writes its uniform, dropping what it
-    /// holds when the settings changed, a reset was asked for or motion vectors are missing.
-    /// Returns a new history (which holds nothing yet) where there was none or its size differs.
+    /// holds where the view's sequence started over or motion vectors are missing. Returns a new
+    /// history (which holds nothing yet) where there was none or its size differs.
     pub fn advance(
         history: Option<&mut TemporalHistory>,
         device: &RenderDevice,
         queue: &RenderQueue,
         frame: HistoryFrame,
     ) -> Option<TemporalHistory> {
-        let key = history_key(frame.settings);
-        let reset = frame.settings.temporal.reset || !frame.motion_vectors || !frame.passes_ready;
+        let reset = frame.started_over || !frame.motion_vectors;
         let uniform = |reset: bool| TemporalUniform {
             reset: u32::from(reset),
             max_frames: frame.settings.temporal.frames() as f32,
@@ -108,11 +105,9 @@ impl TemporalHistory {
         };
         match history {
             Some(history) if history.size == frame.size => {
-                let reset = reset || history.settings != key;
                 // Counted from the reset, as the view's sequence is, so that the frames that clamp
                 // are the same ones in every capture that accumulates the same frames.
                 history.read = if reset { 0 } else { 1 - history.read };
-                history.settings = key;
                 history.uniform.set(uniform(reset));
                 history.uniform.write_buffer(device, queue);
                 None
@@ -122,7 +117,6 @@ impl TemporalHistory {
                     size: frame.size,
                     textures: history_textures(device, frame.size),
                     read: 0,
-                    settings: key,
                     uniform: UniformBuffer::default(),
                 };
                 history.uniform.set(uniform(true));
@@ -150,14 +144,6 @@ fn history_textures(device: &RenderDevice, size: UVec2) -> [(Texture, TextureVie
     })
 }
 
-/// The settings that do not make the history stale when they change.
-pub(super) fn history_key(settings: &DynamicAo) -> DynamicAo {
-    let mut key = settings.clone();
-    key.debug_view = false;
-    key.temporal.reset = false;
-    key
-}
-
 /// Makes, swaps or drops the image-space occlusion's history of each view.
 pub(crate) fn prepare_history(
     mut commands: Commands,
@@ -170,17 +156,16 @@ pub(crate) fn prepare_history(
         Option<FrontLayer>,
         Option<&mut TemporalHistory>,
         Option<&DynamicAoUniform>,
-        Has<AoPassesReady>,
     )>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
     // What last frame left; this frame's new and dropped histories count from the next.
     let bytes = views
         .iter()
-        .filter_map(|(.., history, _, _)| history.map(TemporalHistory::bytes))
+        .filter_map(|(.., history, _)| history.map(TemporalHistory::bytes))
         .sum();
     memory.report("temporal", bytes);
-    for (entity, view, textures, prepass, history, ao_uniform, passes_ready) in &mut views {
+    for (entity, view, textures, prepass, history, ao_uniform) in &mut views {
         let (true, Some(textures)) = (view.temporal, textures) else {
             if history.is_some() {
                 commands.entity(entity).remove::<TemporalHistory>();
@@ -192,8 +177,8 @@ pub(crate) fn prepare_history(
             size: UVec2::new(size.width, size.height),
             scale: if view.half_resolution { 2 } else { 1 },
             settings: &view.settings,
+            started_over: started_over(ao_uniform),
             motion_vectors: prepass.is_some_and(|p| p.motion_vectors().is_some()),
-            passes_ready,
             frame: match view.checkerboard {
                 true => ao_uniform.map_or(0, |u| u.frame_index),
                 false => 0,

@@ -1,7 +1,6 @@
 //! The per-view state of voxel volumes: whether any exist and their occlusion buffers (whether
 //! their passes have compiled is counted in `node.rs`).
 
-use crate::compose::AoPassesReady;
 use crate::nd_buffer::FrontLayer;
 use bevy::ecs::prelude::*;
 use bevy::render::{
@@ -14,10 +13,11 @@ use bevy::render::{
 
 use super::component::VoxelGridInfo;
 use crate::memory::DynamicAoGpuMemory;
-use crate::temporal::{HistoryFrame, TemporalHistory};
+use crate::temporal::{HistoryFrame, TemporalHistory, started_over};
 use crate::view::OCCLUSION_PAIR_FORMAT;
 use crate::view::{
-    DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, half_size, view_size, view_texture,
+    DynamicAoUniform, DynamicAoView, FarFieldOutputs, FarTerm, FarTermsPresent, half_size,
+    view_size, view_texture,
 };
 
 pub(crate) fn note_voxel_volumes(
@@ -75,7 +75,7 @@ pub(crate) fn prepare_voxel_textures(
         &mut FarFieldOutputs,
         Option<FrontLayer>,
         Option<&mut VoxelHistory>,
-        Has<AoPassesReady>,
+        Option<&DynamicAoUniform>,
     )>,
     memory: Res<DynamicAoGpuMemory>,
 ) {
@@ -85,7 +85,7 @@ pub(crate) fn prepare_voxel_textures(
         .filter_map(|(.., history, _)| history.map(|h| h.0.bytes()))
         .sum();
     memory.report("voxel temporal", bytes);
-    for (entity, camera, view, mut outputs, prepass, history, passes_ready) in &mut views {
+    for (entity, camera, view, mut outputs, prepass, history, uniform) in &mut views {
         let (true, Some(size)) = (view.has(FarTerm::Voxels), view_size(camera)) else {
             commands
                 .entity(entity)
@@ -114,10 +114,10 @@ pub(crate) fn prepare_voxel_textures(
                 size: half_size(size),
                 scale: 2,
                 settings: &view.settings,
+                started_over: started_over(uniform),
                 motion_vectors: prepass
                     .as_ref()
                     .is_some_and(|p| p.motion_vectors().is_some()),
-                passes_ready,
                 frame: 0,
             };
             let history = history.map(|h| &mut h.into_inner().0);
