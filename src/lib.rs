@@ -147,6 +147,7 @@ use bevy::app::{App, Plugin};
 use bevy::render::GpuResourceAppExt;
 use bevy::shader::load_shader_library;
 
+pub use compose::{AoShown, DynamicAoStatus};
 pub use memory::DynamicAoGpuMemory;
 pub use settings::{
     AoBlur, AoPreset, AoTechnique, AoTemporal, DynamicAo, FarFieldBlend, FieldShading, HorizonMode,
@@ -156,6 +157,7 @@ pub use settings::{
 /// Everything a user of the crate usually needs.
 pub mod prelude {
     pub use crate::DynamicAoPlugin;
+    pub use crate::compose::{AoShown, DynamicAoStatus};
     pub use crate::fields::{AoField, AoFieldData};
     pub use crate::readback::AoReadback;
     pub use crate::settings::{
@@ -193,6 +195,7 @@ impl Plugin for DynamicAoPlugin {
 
         app.register_type::<DynamicAo>()
             .register_type::<readback::AoReadback>()
+            .register_type::<compose::DynamicAoStatus>()
             .add_plugins((
                 view::ViewPlugin,
                 nd_buffer::NdBufferPlugin,

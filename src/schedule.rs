@@ -57,7 +57,8 @@ pub(crate) enum DynamicAoExtract {
     /// The settings and uniform of each view, which switch off the terms without occluders.
     Views,
     /// One-frame requests the views have read (a temporal reset) are cleared in the main world,
-    /// as Bevy's TAA clears its own: after extraction, so none is lost whenever it was set.
+    /// as Bevy's TAA clears its own: after extraction, so none is lost whenever it was set. And
+    /// what the frame rendered last showed is copied onto the cameras (`DynamicAoStatus`).
     Consumed,
 }
 
@@ -77,6 +78,9 @@ pub(crate) enum DynamicAoPrepare {
     OverlayBindGroups,
     /// MSAA views get back the SSAO resources held aside while Bevy made its bind groups.
     RestoreSsao,
+    /// What each view's AO texture holds this frame is recorded (`DynamicAoStatus`), once
+    /// nothing moves Bevy's SSAO on or off the view any more.
+    Status,
 }
 
 /// Pipelines built once, when the renderer starts.
@@ -169,6 +173,13 @@ pub(crate) fn configure(app: &mut App) {
         Render,
         DynamicAoPrepare::RestoreSsao
             .after(RenderSystems::PrepareBindGroups)
+            .before(RenderSystems::Render),
+    );
+    render_app.configure_sets(
+        Render,
+        DynamicAoPrepare::Status
+            .after(DynamicAoPrepare::HandOver)
+            .after(DynamicAoPrepare::RestoreSsao)
             .before(RenderSystems::Render),
     );
     render_app.configure_sets(

@@ -22,7 +22,8 @@
 //! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
 //! temporal accumulation (on above `low`; `--temporal` and `--no-temporal` override it).
 //! `--frames N` renders N frames with a still camera before the capture, counted from the frame
-//! the scene is ready, where an accumulated history starts over, so that captures are
+//! the scene is ready and the camera's AO shown (`DynamicAoStatus`: not while its shaders still
+//! load), where an accumulated history starts over, so that captures are
 //! reproducible (default: 4, or where the occlusion is accumulated twice the frames its history
 //! spans, so the capture shows it converged: 64 for the ray march, 32 for the others).
 //! `--timings` then prints one line,
@@ -231,7 +232,7 @@ fn drive(
     assets: Res<AssetServer>,
     fields: Query<(Has<ActiveAoField>, Has<PendingAoField>), With<AoField>>,
     mut diagnostics: Option<ResMut<DiagnosticsStore>>,
-    mut ours: Query<&mut DynamicAo, With<AoReadback>>,
+    mut ours: Query<(&mut DynamicAo, Option<&DynamicAoStatus>), With<AoReadback>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     capture.frames += 1;
@@ -240,7 +241,11 @@ fn drive(
         .iter()
         .any(|(active, pending)| pending || (!active && resolving));
     // Bevy's SSAO stands in while a new camera's passes start: those frames do not count.
+    let shown = ours
+        .iter()
+        .any(|(_, status)| status.is_some_and(|s| s.shown != AoShown::Pending));
     let ready = capture.stage != Stage::Loading
+        && shown
         && capture.frames >= capture.stage_start + TIMING_WARMUP_FRAMES
         && !(capture.options.far == Some(FarTerm::Voxels) && capture.volume.is_none())
         && !fields_baking;
@@ -254,7 +259,7 @@ fn drive(
         capture.stage = Stage::Rendering {
             until: Some(capture.frames.saturating_add(capture.options.frames)),
         };
-        for mut ao in &mut ours {
+        for (mut ao, _) in &mut ours {
             if ao.temporal.enabled {
                 ao.temporal.reset = true;
             }
@@ -299,6 +304,12 @@ fn drive(
                 );
                 exit.write(AppExit::error());
             }
+        }
+        Stage::Rendering { until: None }
+            if !shown && capture.frames > capture.stage_start + LOAD_TIMEOUT_FRAMES =>
+        {
+            eprintln!("ao_capture: the AO passes never came into the image (see the errors above)");
+            exit.write(AppExit::error());
         }
         Stage::Rendering { until: Some(until) } if capture.frames >= until => {
             let Some(readback) = capture.readback.clone() else {

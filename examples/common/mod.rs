@@ -15,15 +15,18 @@ use bevy::render::{
     render_resource::TextureFormat,
     view::screenshot::{Screenshot, save_to_disk},
 };
+use bevy::time::TimeUpdateStrategy;
 use bevy::window::ExitCondition;
 use bevy::winit::WinitPlugin;
+use bevy_dynamic_ao::{AoShown, DynamicAo, DynamicAoStatus};
 
 /// Flags every example understands.
 #[derive(Clone, Debug)]
 pub struct ExampleArgs {
     /// Render without a window, to `out`.
     pub headless: bool,
-    /// Frames to render before the capture in headless mode.
+    /// Frames to render in headless mode, counted from the first frame every active camera's AO is
+    /// shown (`headless_capture`); the last one is captured.
     pub frames: u32,
     /// Where the headless run writes its PNG.
     pub out: Option<PathBuf>,
@@ -155,19 +158,19 @@ pub fn example_app(title: &str, args: &ExampleArgs) -> App {
             headless_plugins(),
             ScheduleRunnerPlugin::run_loop(Duration::ZERO),
         ));
-        // Each frame advances time by 1/30 s, so a headless capture of frame N shows the moment
-        // N / 30 s on every machine, however slowly it renders.
-        app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
-            Duration::from_secs_f64(1.0 / 30.0),
-        ))
-        .insert_resource(HeadlessRun {
-            frames: args.frames,
-            out: args.out.clone().unwrap_or_else(|| PathBuf::from("out.png")),
-            size: UVec2::new(args.width, args.height),
-            target: None,
-            done: false,
-        })
-        .add_systems(Update, headless_capture);
+        // Time stands still until the AO is shown, then each frame advances it by 1/30 s (see
+        // `headless_capture`): a capture shows the same moment on every machine, however slowly
+        // it renders and however late its shaders load.
+        app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::ZERO))
+            .insert_resource(HeadlessRun {
+                frames: args.frames,
+                out: args.out.clone().unwrap_or_else(|| PathBuf::from("out.png")),
+                size: UVec2::new(args.width, args.height),
+                target: None,
+                done: false,
+                first_shown: None,
+            })
+            .add_systems(Update, headless_capture);
     } else {
         app.add_plugins(DefaultPlugins.set(asset_plugin()).set(WindowPlugin {
             primary_window: Some(Window {
@@ -189,7 +192,7 @@ pub fn spawn_ao_camera(
     world: &mut World,
     eye: Vec3,
     look_at: Vec3,
-    ao: bevy_dynamic_ao::DynamicAo,
+    ao: DynamicAo,
     ambient: f32,
 ) -> Entity {
     let target = camera_target(world);
@@ -231,15 +234,53 @@ pub struct HeadlessRun {
     pub size: UVec2,
     pub target: Option<Handle<Image>>,
     pub done: bool,
+    /// The app frame on which a camera's AO was first seen shown (`DynamicAoStatus`).
+    pub first_shown: Option<u32>,
 }
 
+/// App frames a headless run waits for its cameras' AO to be shown before it gives up.
+const SHOWN_TIMEOUT_FRAMES: u32 = 1200;
+
+/// Counts the headless run's frames from the first one on which every active camera's AO is shown
+/// and the example's [`RequiredAsset`] has loaded (until then shaders and models load and Bevy's
+/// SSAO stands in, for as many frames as the machine's load makes it), and captures the last.
+/// There the accumulating cameras start their history over and time starts moving, so every run
+/// of the same flags captures the same frames.
+#[allow(clippy::too_many_arguments)]
 fn headless_capture(
     mut commands: Commands,
-    run: Res<HeadlessRun>,
+    mut run: ResMut<HeadlessRun>,
     frame: Res<FrameCount>,
+    mut cameras: Query<(&DynamicAoStatus, &mut DynamicAo, &Camera)>,
+    required: Option<Res<RequiredAsset>>,
+    assets: Res<AssetServer>,
+    mut time: ResMut<TimeUpdateStrategy>,
     mut exit: MessageWriter<AppExit>,
 ) {
-    if frame.0 == run.frames {
+    if run.first_shown.is_none() {
+        // Every camera that renders (the showcase turns off the views it does not lay out).
+        let mut rendering = cameras.iter().filter(|(.., camera)| camera.is_active);
+        let shown = rendering.clone().next().is_some()
+            && rendering.all(|(status, ..)| status.shown != AoShown::Pending);
+        let loaded = required.is_none_or(|r| assets.is_loaded_with_dependencies(&r.handle));
+        if shown && loaded {
+            run.first_shown = Some(frame.0);
+            for (_, mut ao, _) in &mut cameras {
+                if ao.temporal.enabled {
+                    ao.temporal.reset = true;
+                }
+            }
+            *time = TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(1.0 / 30.0));
+        } else if frame.0 > SHOWN_TIMEOUT_FRAMES {
+            eprintln!(
+                "error: within {SHOWN_TIMEOUT_FRAMES} frames not every camera's ambient occlusion \
+                 was shown (shown: {shown}) or the example's asset did not load (loaded: {loaded})"
+            );
+            exit.write(AppExit::error());
+        }
+    }
+    let last = run.first_shown.map(|first| first + run.frames - 1);
+    if Some(frame.0) == last {
         let Some(target) = run.target.clone() else {
             eprintln!("error: the example spawned no camera for the headless run");
             exit.write(AppExit::error());
@@ -259,7 +300,7 @@ fn headless_capture(
     if run.done && run.out.exists() {
         println!("wrote {}", run.out.display());
         exit.write(AppExit::Success);
-    } else if frame.0 > run.frames + 120 {
+    } else if last.is_some_and(|last| frame.0 > last + 120) {
         eprintln!("error: the screenshot never arrived");
         exit.write(AppExit::error());
     }
@@ -310,7 +351,7 @@ pub fn fail_without_required_asset(
 
 /// Keys the far-field examples share: N switches the image-space term (the default technique)
 /// on and off, D the debug view.
-pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dynamic_ao::DynamicAo) {
+pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut DynamicAo) {
     use bevy_dynamic_ao::AoTechnique;
     if keys.just_pressed(KeyCode::KeyN) {
         ao.technique = match ao.technique {
@@ -325,8 +366,8 @@ pub fn near_field_and_debug_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dyna
 
 /// Keys 1–4 put the preset of that level on `ao` (`AoPreset::ALL`, low to ultra), keeping the
 /// debug view as it is.
-pub fn preset_keys(keys: &ButtonInput<KeyCode>, ao: &mut bevy_dynamic_ao::DynamicAo) {
-    use bevy_dynamic_ao::{AoPreset, DynamicAo};
+pub fn preset_keys(keys: &ButtonInput<KeyCode>, ao: &mut DynamicAo) {
+    use bevy_dynamic_ao::AoPreset;
     let digits = [
         KeyCode::Digit1,
         KeyCode::Digit2,

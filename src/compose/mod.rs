@@ -20,10 +20,13 @@ mod failed;
 mod node;
 mod pipeline;
 mod ssao_slot;
+mod status;
 
 pub(crate) use failed::FailedPipelines;
 pub(crate) use pipeline::bevy_ssao_format;
 pub(crate) use ssao_slot::{ParkedSsao, bevy_ssao_runs, visibility_texture};
+pub(crate) use status::shown;
+pub use status::{AoShown, DynamicAoStatus};
 
 use bevy::app::{App, Plugin};
 use bevy::asset::embedded_asset;
@@ -54,12 +57,16 @@ impl Plugin for ComposePlugin {
         };
         render_app
             .init_resource::<FailedPipelines>()
+            .init_resource::<status::RenderedStatuses>()
             .init_gpu_resource::<pipeline::ComposePipeline>()
             .init_gpu_resource::<debug_view::DebugViewPipeline>()
             .init_gpu_resource::<SpecializedRenderPipelines<debug_view::DebugViewPipeline>>()
             .add_systems(
                 ExtractSchedule,
-                ssao_slot::extract_msaa_slots.in_set(DynamicAoExtract::Views),
+                (
+                    ssao_slot::extract_msaa_slots.in_set(DynamicAoExtract::Views),
+                    status::publish_statuses.in_set(DynamicAoExtract::Consumed),
+                ),
             )
             .add_systems(
                 Render,
@@ -81,6 +88,7 @@ impl Plugin for ComposePlugin {
                         .in_set(DynamicAoPrepare::RestoreSsao),
                     debug_view::prepare_debug_view_pipelines.in_set(RenderSystems::Prepare),
                     hand_over_from_bevy_ssao.in_set(DynamicAoPrepare::HandOver),
+                    status::record_statuses.in_set(DynamicAoPrepare::Status),
                     failed::report_failed_pipelines.in_set(DynamicAoPrepare::HandOver),
                     (
                         pipeline::prepare_compose_bind_groups,

@@ -10,7 +10,7 @@ use bevy::render::{
 };
 
 use super::pipeline::{ReadbackBindGroup, ReadbackPipeline};
-use crate::compose::{AoPassesReady, FailedPipelines, bevy_ssao_runs};
+use crate::compose::{AoPassesReady, AoShown, FailedPipelines, bevy_ssao_runs, shown};
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn readback_pass(
@@ -31,12 +31,12 @@ pub(crate) fn readback_pass(
     // Until the passes of the view's technique have compiled, its texture holds zeros or, in
     // their place, Bevy's SSAO: the copy says so rather than pass either off as the view's AO.
     // Where one of ours failed for good, Bevy's SSAO is the fallback the camera keeps.
-    let bevy_ssao_ran = bevy_ssao_runs(bevy_ssao, &pipeline_cache);
-    let written = if ao_view.replaces_bevy_ssao() {
-        ours_ready || (failed.any() && bevy_ssao_ran)
-    } else {
-        bevy_ssao_ran
-    };
+    let written = shown(
+        ao_view.replaces_bevy_ssao(),
+        ours_ready,
+        bevy_ssao_runs(bevy_ssao, &pipeline_cache),
+        failed.any(),
+    ) != AoShown::Pending;
     let variant = if written {
         pipeline.pipeline
     } else {

@@ -46,7 +46,7 @@ fn deforming_characters_renders_headless() {
         let mut args = vec![
             "--headless",
             "--frames",
-            "30",
+            "12",
             "--width",
             "160",
             "--height",
@@ -86,12 +86,12 @@ fn deforming_characters_renders_headless() {
         "deforming_characters debug view: {cast} pixels darker with 4 walkers than with 1, \
          {lost} lighter"
     );
-    // Measured at frame 30: 249 darker, 67 lighter, with another test process beside it. At frame
-    // 12 CI once read 308 and 202: the frames `--frames` counts begin when the app starts, and
-    // where the shaders load late under load the AO is shown, and its history begins, only a few
-    // frames before the capture.
+    // Measured: 278 darker, 75 lighter, alone and beside another test process alike (`--frames`
+    // counts from the first frame the AO is shown and the walker loaded, where the history and
+    // the clock start: the images were equal). Before, it counted from the app's start, and CI
+    // once read 308 and 202 where the shaders loaded late.
     assert!(
-        cast > 150 && cast > 3 * lost,
+        cast > 250 && lost < 90,
         "the walkers should cast occlusion ({cast} darker, {lost} lighter)"
     );
 
@@ -140,8 +140,9 @@ fn toasters_renders_headless() {
     let image = image_luma(&out);
     let occluded = image.iter().filter(|v| **v < 240).count();
     println!("toasters debug view: {occluded} occluded pixels");
+    // Measured: 3416, alone and beside another test process alike.
     assert!(
-        occluded > 200,
+        occluded > 3000,
         "the toasters and the counter should cast occlusion"
     );
     let bad = run(&["--stress", "many"]);
@@ -198,10 +199,11 @@ fn showcase_renders_ours_bevys_and_none_side_by_side() {
          {ours_lighter}, Bevy's SSAO {bevy_darker} / {bevy_lighter}",
         ours.len()
     );
-    // Measured: ours 2837 / 0, Bevy's 6317 / 0 (Bevy's darkens more, and more widely: its error
-    // against ground truth is several times ours).
-    assert!(ours_darker > 2400, "ours should darken the hall");
-    assert!(bevy_darker > 5400, "Bevy's SSAO should darken the hall");
+    // Measured: ours 3760 / 0, Bevy's 6247 / 0 (Bevy's darkens more, and more widely: its error
+    // against ground truth is several times ours), alone and under load alike: `--frames` counts
+    // from the frame all three views show their AO, where the clock starts.
+    assert!(ours_darker > 3400, "ours should darken the hall");
+    assert!(bevy_darker > 5600, "Bevy's SSAO should darken the hall");
     assert!(
         ours_lighter + bevy_lighter <= 10,
         "the three views should show the same moment"

@@ -169,3 +169,116 @@ fn a_camera_whose_ao_nothing_writes_yet_is_lit_as_one_without_ao() {
         "the camera should be lit as without AO: largest difference {worst}"
     );
 }
+
+/// `DynamicAoStatus` through a camera's life, read in the main world after each update: `Shown`
+/// with one more frame each update while the AO runs; `Pending` with 0 frames while a shader is
+/// out; from its return frames 1, 2, 3, … (the accumulation starts on the first frame shown); a
+/// reset starts the count over; a camera that stops rendering or loses its `DynamicAo` reads
+/// `Pending`, and one that renders Bevy's SSAO reads `Shown`.
+#[test]
+fn a_cameras_status_says_whether_its_ao_is_shown_and_for_how_many_frames() {
+    let scene = scenes::cube_on_plane();
+    let mut gpu = Gpu::new(&scene, DynamicAo::default());
+    gpu.frame(4);
+    let status = |gpu: &Gpu| {
+        *gpu.app
+            .world()
+            .get::<DynamicAoStatus>(gpu.camera)
+            .expect("the plugin puts a status on every camera with DynamicAo")
+    };
+    let pending = DynamicAoStatus {
+        shown: AoShown::Pending,
+        frames: 0,
+    };
+    // The frames each of `updates` updates reads, asserting that the AO is shown on each.
+    let shown_frames = |gpu: &mut Gpu, updates: u32| -> Vec<u32> {
+        (0..updates)
+            .map(|_| {
+                gpu.update(1);
+                let now = status(gpu);
+                assert_eq!(now.shown, AoShown::Shown, "{now:?}");
+                now.frames
+            })
+            .collect()
+    };
+    let one_more_each = |frames: &[u32]| frames.windows(2).all(|w| w[1] == w[0] + 1);
+
+    let running = shown_frames(&mut gpu, 5);
+    assert!(one_more_each(&running), "running: {running:?}");
+
+    let compose = gpu.take_shader("compose/compose.wgsl");
+    gpu.update(4);
+    assert_eq!(status(&gpu), pending, "while the compose shader is out");
+    assert!(
+        gpu.frame_now().visibility.iter().all(|v| *v == -1.0),
+        "the read-back agrees: nothing the camera asked for is shown"
+    );
+    gpu.restore_shader(compose);
+    let mut back = Vec::new();
+    for _ in 0..60 {
+        gpu.update(1);
+        match status(&gpu) {
+            now if now.shown == AoShown::Shown => back.push(now.frames),
+            now => assert!(back.is_empty() && now == pending, "{now:?} after {back:?}"),
+        }
+        if back.len() == 6 {
+            break;
+        }
+    }
+    assert_eq!(back, [1, 2, 3, 4, 5, 6], "from the shader's return");
+    assert!(
+        gpu.frame_now()
+            .visibility
+            .iter()
+            .all(|v| (0.0..=1.0).contains(v)),
+        "the read-back agrees: the AO is written"
+    );
+
+    gpu.set_ao(|ao| ao.temporal.reset = true);
+    let reset = shown_frames(&mut gpu, 6);
+    let breaks = reset.windows(2).filter(|w| w[1] != w[0] + 1).count();
+    assert!(
+        breaks == 1 && reset.contains(&1),
+        "a reset starts the count over once: {reset:?}"
+    );
+
+    gpu.set_ao(|ao| ao.temporal.enabled = false);
+    let plain = shown_frames(&mut gpu, 6);
+    assert!(
+        one_more_each(&plain[2..]),
+        "without accumulation, frames in a row: {plain:?}"
+    );
+
+    gpu.set_ao(|ao| ao.temporal.enabled = true);
+    let again = shown_frames(&mut gpu, 6);
+    assert!(
+        again.contains(&1) && one_more_each(&again[again.iter().position(|f| *f == 1).unwrap()..]),
+        "accumulation on again starts its count over: {again:?}"
+    );
+
+    gpu.set_ao(|ao| ao.technique = AoTechnique::BevySsao);
+    gpu.update(4);
+    assert_eq!(status(&gpu).shown, AoShown::Shown, "Bevy's SSAO, as asked");
+
+    gpu.set_ao(|ao| ao.technique = AoTechnique::default());
+    let camera = gpu.camera;
+    let active = |gpu: &mut Gpu, active: bool| {
+        let world = gpu.app.world_mut();
+        world.get_mut::<Camera>(camera).unwrap().is_active = active;
+    };
+    active(&mut gpu, false);
+    gpu.update(3);
+    assert_eq!(status(&gpu), pending, "an inactive camera shows nothing");
+    active(&mut gpu, true);
+    gpu.update(4);
+    assert_eq!(status(&gpu).shown, AoShown::Shown, "active again");
+
+    println!(
+        "status frames: running {running:?}, from the shader's return {back:?}, across a reset \
+         {reset:?}, accumulation off {plain:?}, on \
+         again {again:?}"
+    );
+    gpu.app.world_mut().entity_mut(camera).remove::<DynamicAo>();
+    gpu.update(3);
+    assert_eq!(status(&gpu), pending, "without DynamicAo");
+}
