@@ -25,7 +25,8 @@ pub const DEFAULT_TEMPORAL_FRAMES: u32 = 16;
 /// or a voxel volume needs it), which stays when accumulation is turned off again (taking it away
 /// from a running camera stopped its rendering in our tests). It does not need Bevy's temporal
 /// anti-aliasing, and works beside it on the same camera: with Bevy's
-/// `TemporalAntiAliasing` the converged error stays within 0.002 of the error without it
+/// `TemporalAntiAliasing` the converged error rises by 0.001–0.003 on average over the places in
+/// TAA's 8-frame jitter cycle where the accumulation can start, by 0.005 at the worst
 /// (`cargo test --test gpu accumulation_works_with_bevys`).
 #[derive(Reflect, Clone, Copy, Debug, PartialEq)]
 #[reflect(Default, Clone, Debug, PartialEq)]
