@@ -30,10 +30,10 @@ pub enum AoShown {
 
 /// Whether, and for how many frames, a camera's image has shown its ambient occlusion.
 ///
-/// The plugin inserts it on every camera with [`DynamicAo`] and updates it at each extraction
-/// with the frame the renderer finished last: in an `Update` system it describes the frame begun
-/// two app updates before (one with Bevy's pipelined rendering off as well: extraction runs after
-/// `Update`). Watch it to hide a loading screen until the AO is in the image, or to take a
+/// The plugin inserts it on every camera with [`DynamicAo`] at the first extraction after the
+/// component arrives, and updates it at each extraction with the frame the renderer finished
+/// last: in an `Update` system it describes the frame begun two app updates before, with Bevy's
+/// pipelined rendering on or off (extraction runs after `Update`). Watch it to hide a loading screen until the AO is in the image, or to take a
 /// screenshot once the accumulation has converged; the examples' headless `--frames N` and
 /// `ao_capture` count their frames from its first [`AoShown::Shown`].
 #[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
