@@ -244,4 +244,14 @@ fn a_pipeline_that_fails_to_compile_leaves_the_camera_on_bevys_ssao() {
         from_bevy < 1e-3,
         "the camera should show Bevy's SSAO: {from_bevy}"
     );
+    // The camera's status says so too, frames in a row counting on.
+    let status = |gpu: &Gpu| *gpu.app.world().get::<DynamicAoStatus>(gpu.camera).unwrap();
+    let first = status(&gpu);
+    gpu.update(3);
+    let later = status(&gpu);
+    assert!(
+        first.shown == AoShown::Fallback && later.shown == AoShown::Fallback,
+        "the status should say Bevy's SSAO stands in: {first:?}, {later:?}"
+    );
+    assert_eq!(later.frames, first.frames + 3, "{first:?}, {later:?}");
 }
