@@ -93,6 +93,18 @@ fn configurations() -> Vec<Configuration> {
                 ..default()
             },
         ),
+        // The longer history the README offers where the camera mostly holds still: less grain,
+        // a longer trail (BENCHMARKS.md, "How many samples a history averages").
+        ours(
+            "ours, default with a 32-sample history",
+            DynamicAo {
+                temporal: AoTemporal {
+                    max_frames: 32,
+                    ..default()
+                },
+                ..default()
+            },
+        ),
         ours("ours, preset low", DynamicAo::from_preset(AoPreset::Low)),
         ours(
             "ours, preset medium",

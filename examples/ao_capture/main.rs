@@ -9,7 +9,8 @@
 //!     [--thickness F] [--full-back-faces] [--half-res] \
 //!     [--far-blend count-once|add|max] [--near-field-radius M] \
 //!     [--voxel-falloff none|wendland] [--frames N] \
-//!     [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png \
+//!     [--time SECONDS] [--temporal|--no-temporal] [--history-frames N] [--msaa 1|4] \
+//!     [--timings] --out-ao AO.png \
 //!     [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
 //! ```
 //!
@@ -20,12 +21,15 @@
 //!
 //! `--technique default` captures what `DynamicAo::from_preset(--preset)` runs (with the default
 //! preset, `DynamicAo::default()`). Every technique gets the level's sample budgets and its
-//! temporal accumulation (on above `low`; `--temporal` and `--no-temporal` override it).
+//! temporal accumulation (on above `low`; `--temporal` and `--no-temporal` override it);
+//! `--history-frames N` sets how many samples a history averages (`AoTemporal::max_frames`,
+//! default 16).
 //! `--frames N` renders N frames with a still camera before the capture, counted from the frame
 //! the scene is ready and the camera's AO shown (`DynamicAoStatus`: not while its shaders still
 //! load), where an accumulated history starts over, so that captures are
 //! reproducible (default: 4, or where the occlusion is accumulated twice the frames its history
-//! spans, so the capture shows it converged: 64 for the ray march, 32 for the others).
+//! spans, so the capture shows it converged: 64 for the ray march, 32 for the others, with the
+//! default history).
 //! `--timings` then prints one line,
 //! `timings: ao_gpu_ms=<mean GPU ms of the AO passes> frame_gpu_ms=<all passes> frames=<n>`, over
 //! the frames rendered once the scene was ready, waiting for the last ones' spans (for

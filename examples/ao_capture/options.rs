@@ -12,7 +12,7 @@ pub use crate::far_terms::FarTerm;
 
 pub const USAGE: &str = "usage: ao_capture --scene FILE.glb --width W --height H --radius R \
 --technique NAME [--preset low|medium|high|ultra] [--blur PIXELS] [--accumulated-blur PIXELS] [--voxel-accumulated-blur PIXELS] [--blur-sharpness S] [--blur-normal-sharpness S] [--blur-detail PIXELS] [--thickness F] [--full-back-faces] [--half-res] [--far-blend count-once|add|max] [--near-field-radius M] \
-[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
+[--voxel-falloff none|wendland] [--frames N] [--time SECONDS] [--temporal|--no-temporal] [--history-frames N] [--msaa 1|4] [--timings] --out-ao AO.png [--out-color COLOR.png] [--compare SIDE_BY_SIDE.png] [--out-truth TRUTH.png]
        ao_capture --technique list";
 
 /// Largest image side every wgpu adapter supports (`max_texture_dimension_2d` default), pixels.
@@ -119,7 +119,7 @@ pub struct Options {
     /// Animation time of the scene's first animation, seconds.
     pub time: f32,
     /// Accumulate the image-space occlusion over the frames: the level's choice, or
-    /// `--temporal` / `--no-temporal`.
+    /// `--temporal` / `--no-temporal`; `--history-frames` sets `AoTemporal::max_frames`.
     pub temporal: AoTemporal,
     /// Print the mean GPU time of the AO passes and of all passes after the capture.
     pub timings: bool,
@@ -169,6 +169,7 @@ impl Options {
         let (mut out_ao, mut out_color, mut compare) = (None, None, None);
         let mut out_truth = None;
         let mut msaa = 1;
+        let mut history_frames = None;
         let mut args = args.into_iter();
         while let Some(flag) = args.next() {
             let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -214,6 +215,10 @@ impl Options {
                 "--timings" => timings = true,
                 "--temporal" => temporal = Some(AoTemporal::ON),
                 "--no-temporal" => temporal = Some(AoTemporal::OFF),
+                "--history-frames" => {
+                    history_frames =
+                        Some(parse_between(&flag, &value()?, 1, AoTemporal::MAX_FRAMES)?);
+                }
                 "--far-blend" => {
                     let name = value()?;
                     far_blend = FarFieldBlend::from_name(&name).ok_or(format!(
@@ -330,6 +335,10 @@ impl Options {
             true => preset.technique(),
             false => t,
         });
+        let temporal = AoTemporal {
+            max_frames: history_frames.unwrap_or(preset.temporal().max_frames),
+            ..temporal.unwrap_or(preset.temporal())
+        };
         Ok(Some(Options {
             scene,
             width: width.ok_or_else(|| missing("--width"))?,
@@ -339,7 +348,7 @@ impl Options {
             default_technique,
             timings,
             msaa,
-            temporal: temporal.unwrap_or(preset.temporal()),
+            temporal,
             far: technique.and_then(|(_, far)| far),
             far_blend,
             near_field_radius,
@@ -358,7 +367,7 @@ impl Options {
                 let ao = DynamicAo {
                     technique: image_technique.unwrap_or_default(),
                     ray_march: preset.ray_march(),
-                    temporal: temporal.unwrap_or(preset.temporal()),
+                    temporal,
                     ..DynamicAo::default()
                 };
                 match ao.history_frames() {

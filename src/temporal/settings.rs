@@ -37,7 +37,11 @@ pub struct AoTemporal {
     /// change in the scene takes about this many frames to settle where the clamp does not catch
     /// it. Under the ray march's [checkerboard](crate::RayMarchParams::checkerboard) a texel
     /// gains a sample every other frame, and this counts samples: the history spans twice as many
-    /// frames. Valid: 1..=64. Default: [`DEFAULT_TEMPORAL_FRAMES`].
+    /// frames. At 32 a still view's grain falls further (its flicker by a third) and the
+    /// converged error with it, at no cost per frame, while a stale shadow fades more slowly
+    /// (the trail behind moving occluders about a tenth longer in the temporal bench;
+    /// BENCHMARKS.md, "How many samples a history averages"): worth it where the camera mostly
+    /// holds still. Valid: 1..=64. Default: [`DEFAULT_TEMPORAL_FRAMES`].
     pub max_frames: u32,
     /// Drop every pixel's history on the next frame (set it on a camera cut); the plugin sets it
     /// back to `false`. The history is also dropped when the view's size or its other settings

@@ -147,6 +147,14 @@ fn bad_input_gives_a_one_line_error() {
         (
             [
                 base(&["--scene", scene]),
+                vec!["--history-frames".into(), "0".into()],
+            ]
+            .concat(),
+            "--history-frames takes a number from 1 to 64",
+        ),
+        (
+            [
+                base(&["--scene", scene]),
                 vec!["--technique".into(), "magic".into()],
             ]
             .concat(),
