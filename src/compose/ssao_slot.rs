@@ -216,11 +216,16 @@ pub(crate) fn stand_in_open_textures(
 }
 
 /// Holds the SSAO resources of MSAA views aside while Bevy makes its bind groups.
-pub(crate) fn park_msaa_resources(world: &mut World) {
-    let mut views = world.query_filtered::<Entity, (
-        With<MsaaSsaoSlot>,
-        With<ScreenSpaceAmbientOcclusionResources>,
-    )>();
+pub(crate) fn park_msaa_resources(
+    world: &mut World,
+    views: &mut QueryState<
+        Entity,
+        (
+            With<MsaaSsaoSlot>,
+            With<ScreenSpaceAmbientOcclusionResources>,
+        ),
+    >,
+) {
     let views: Vec<Entity> = views.iter(world).collect();
     for entity in views {
         let mut view = world.entity_mut(entity);
@@ -231,8 +236,10 @@ pub(crate) fn park_msaa_resources(world: &mut World) {
 }
 
 /// Puts the parked resources back, for the main pass.
-pub(crate) fn restore_msaa_resources(world: &mut World) {
-    let mut views = world.query_filtered::<Entity, With<ParkedSsao>>();
+pub(crate) fn restore_msaa_resources(
+    world: &mut World,
+    views: &mut QueryState<Entity, With<ParkedSsao>>,
+) {
     let views: Vec<Entity> = views.iter(world).collect();
     for entity in views {
         let mut view = world.entity_mut(entity);

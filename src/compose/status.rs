@@ -113,18 +113,24 @@ pub(crate) fn record_statuses(
     }
 }
 
+/// The main-world cameras [`publish_statuses`] writes to.
+type StatusCameras = QueryState<
+    (Entity, Option<&'static mut DynamicAoStatus>),
+    Or<(With<DynamicAo>, With<DynamicAoStatus>)>,
+>;
+
 /// Copies the statuses of the frame last rendered onto the main-world cameras: inserted on a
 /// camera with [`DynamicAo`] that has none yet, and [`AoShown::Pending`] on one that did not
 /// render. Written only where it changed, so `Changed<DynamicAoStatus>` says when it did.
 pub(crate) fn publish_statuses(
     mut main_world: ResMut<MainWorld>,
     rendered: Res<RenderedStatuses>,
+    mut cameras: Local<Option<StatusCameras>>,
     mut missing: Local<Vec<(Entity, DynamicAoStatus)>>,
 ) {
-    let mut cameras = main_world.query_filtered::<
-        (Entity, Option<&mut DynamicAoStatus>),
-        Or<(With<DynamicAo>, With<DynamicAoStatus>)>,
-    >();
+    // Kept from frame to frame, as Bevy's `Extract` keeps its queries: the main world moves in
+    // and out of `MainWorld` but stays the same world.
+    let cameras = cameras.get_or_insert_with(|| main_world.query_filtered());
     for (camera, status) in cameras.iter_mut(&mut main_world) {
         let now = rendered.0.get(&camera).copied().unwrap_or_default();
         match status {

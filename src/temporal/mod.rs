@@ -131,8 +131,13 @@ fn require_motion_vectors(
 }
 
 /// A reset lasts one frame: cleared in the main world once this frame's views have read it.
-fn clear_reset(mut main_world: ResMut<MainWorld>) {
-    let mut cameras = main_world.query::<&mut DynamicAo>();
+fn clear_reset(
+    mut main_world: ResMut<MainWorld>,
+    mut cameras: Local<Option<QueryState<&'static mut DynamicAo>>>,
+) {
+    // Kept from frame to frame: the main world moves in and out of `MainWorld` but stays the
+    // same world.
+    let cameras = cameras.get_or_insert_with(|| main_world.query());
     for mut ao in cameras.iter_mut(&mut main_world) {
         if ao.temporal.reset {
             ao.bypass_change_detection().temporal.reset = false;
