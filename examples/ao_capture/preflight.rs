@@ -1,12 +1,26 @@
-//! A look at the file's glTF structure before Bevy's loader reads it. Two kinds of malformed file
-//! make the glTF reader inside Bevy's loader panic rather than return an error: an attribute that
-//! names an accessor the file does not have (the validator indexes it before it reports it), and
-//! a buffer view whose stride is shorter than the elements its accessors read. Bevy catches the
-//! loader's panic, but its message and backtrace end up on stderr; the capture names the fault in
-//! one line instead and does not hand the file on.
+//! A look at the file's glTF structure before Bevy's loader reads it. Some malformed files make
+//! the glTF reader inside Bevy's loader panic rather than return an error:
+//!
+//! - an attribute that names an accessor the file does not have (the validator indexes it before
+//!   it reports it);
+//! - a buffer view whose stride is shorter than the elements its accessors read;
+//! - an accessor read as elements of another shape than it holds: indices that are not single
+//!   unsigned integers, animation key times that are not single floats, key values of another
+//!   shape than their channel's property, inverse bind matrices that are not 4 × 4 floats;
+//! - an animation channel whose target node or sampler the file does not have.
+//!
+//! Bevy catches the loader's panic, but its message and backtrace end up on stderr; the capture
+//! names the fault in one line instead and does not hand the file on.
 
 use std::panic;
 use std::path::Path;
+
+use gltf::json::{
+    self,
+    accessor::{ComponentType, Type},
+    animation::Property,
+    validation::Checked,
+};
 
 /// What is wrong with the glTF file at `path`, where it is one of the kinds above. Anything else
 /// (a missing file, a file that is no glTF) is left to Bevy's loader, which reports it.
@@ -30,6 +44,7 @@ pub fn check(path: &Path) -> Result<(), String> {
         Ok(Err(_)) => return Ok(()),
         Ok(Ok(gltf)) => gltf,
     };
+    let fault = |what: String| Err(format!("cannot load {}: {what}", path.display()));
     for accessor in gltf.accessors() {
         let Some(view) = accessor.view() else {
             continue;
@@ -37,10 +52,9 @@ pub fn check(path: &Path) -> Result<(), String> {
         if let Some(stride) = view.stride()
             && stride < accessor.size()
         {
-            return Err(format!(
-                "cannot load {}: accessor {} reads elements of {} bytes through buffer view {}, \
-                 whose stride is {} bytes",
-                path.display(),
+            return fault(format!(
+                "accessor {} reads elements of {} bytes through buffer view {}, whose stride is \
+                 {} bytes",
                 accessor.index(),
                 accessor.size(),
                 view.index(),
@@ -48,5 +62,144 @@ pub fn check(path: &Path) -> Result<(), String> {
             ));
         }
     }
-    Ok(())
+    match element_shapes(gltf.document.as_json()) {
+        Some(what) => fault(what),
+        None => Ok(()),
+    }
+}
+
+/// The first accessor that Bevy's loader would read as elements of another shape than it holds,
+/// or an animation channel that names a node or sampler the file does not have, in words.
+/// Indices are taken from the JSON and checked here: the validator leaves some unchecked, and
+/// the reader's own lookups unwrap them.
+fn element_shapes(root: &json::Root) -> Option<String> {
+    let shape = |index: usize| -> Option<(Type, ComponentType)> {
+        let accessor = root.accessors.get(index)?;
+        match (accessor.type_, accessor.component_type) {
+            (Checked::Valid(kind), Checked::Valid(component)) => Some((kind, component.0)),
+            _ => None,
+        }
+    };
+    let unsigned = [ComponentType::U8, ComponentType::U16, ComponentType::U32];
+    // Rotations and morph weights may also be stored as normalized integers.
+    let float_or_normalized = [
+        ComponentType::F32,
+        ComponentType::I8,
+        ComponentType::U8,
+        ComponentType::I16,
+        ComponentType::U16,
+    ];
+    let wrong = |index: usize, kind: Type, components: &[ComponentType]| {
+        shape(index).filter(|&(k, c)| k != kind || !components.contains(&c))
+    };
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let Some(indices) = primitive.indices.map(|i| i.value()) else {
+                continue;
+            };
+            if let Some(found) = wrong(indices, Type::Scalar, &unsigned) {
+                return Some(format!(
+                    "primitive {p} of mesh {m} reads its indices from accessor {indices}, which \
+                     holds {}; indices are single unsigned integers",
+                    describe(found)
+                ));
+            }
+        }
+    }
+    for (s, skin) in root.skins.iter().enumerate() {
+        let Some(matrices) = skin.inverse_bind_matrices.map(|i| i.value()) else {
+            continue;
+        };
+        if let Some(found) = wrong(matrices, Type::Mat4, &[ComponentType::F32]) {
+            return Some(format!(
+                "skin {s} reads its inverse bind matrices from accessor {matrices}, which holds \
+                 {}; they are 4 × 4 matrices of floats",
+                describe(found)
+            ));
+        }
+    }
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= root.nodes.len() {
+                return Some(format!(
+                    "channel {c} of animation {a} moves node {node}, and the file has {} nodes",
+                    root.nodes.len()
+                ));
+            }
+            let Some(sampler) = animation.samplers.get(channel.sampler.value()) else {
+                return Some(format!(
+                    "channel {c} of animation {a} uses sampler {}, and the animation has {}",
+                    channel.sampler.value(),
+                    animation.samplers.len()
+                ));
+            };
+            let input = sampler.input.value();
+            if let Some(found) = wrong(input, Type::Scalar, &[ComponentType::F32]) {
+                return Some(format!(
+                    "channel {c} of animation {a} reads its key times from accessor {input}, \
+                     which holds {}; key times are single floats",
+                    describe(found)
+                ));
+            }
+            let (kind, components, property, takes) = match channel.target.path {
+                Checked::Valid(Property::Translation) => (
+                    Type::Vec3,
+                    &[ComponentType::F32][..],
+                    "a translation",
+                    "VEC3 of FLOAT",
+                ),
+                Checked::Valid(Property::Scale) => (
+                    Type::Vec3,
+                    &[ComponentType::F32][..],
+                    "a scale",
+                    "VEC3 of FLOAT",
+                ),
+                Checked::Valid(Property::Rotation) => (
+                    Type::Vec4,
+                    &float_or_normalized[..],
+                    "a rotation",
+                    "VEC4 of FLOAT or of normalized integers",
+                ),
+                Checked::Valid(Property::MorphTargetWeights) => (
+                    Type::Scalar,
+                    &float_or_normalized[..],
+                    "morph target weights",
+                    "SCALAR of FLOAT or of normalized integers",
+                ),
+                Checked::Invalid => continue,
+            };
+            let output = sampler.output.value();
+            if let Some(found) = wrong(output, kind, components) {
+                return Some(format!(
+                    "channel {c} of animation {a} animates {property} from accessor {output}, \
+                     which holds {}; such a channel reads {takes}",
+                    describe(found)
+                ));
+            }
+        }
+    }
+    None
+}
+
+/// An accessor's element as the glTF specification names it: "VEC3 of FLOAT".
+fn describe((kind, component): (Type, ComponentType)) -> String {
+    let kind = match kind {
+        Type::Scalar => "SCALAR",
+        Type::Vec2 => "VEC2",
+        Type::Vec3 => "VEC3",
+        Type::Vec4 => "VEC4",
+        Type::Mat2 => "MAT2",
+        Type::Mat3 => "MAT3",
+        Type::Mat4 => "MAT4",
+    };
+    let component = match component {
+        ComponentType::I8 => "BYTE",
+        ComponentType::U8 => "UNSIGNED_BYTE",
+        ComponentType::I16 => "SHORT",
+        ComponentType::U16 => "UNSIGNED_SHORT",
+        ComponentType::U32 => "UNSIGNED_INT",
+        ComponentType::F32 => "FLOAT",
+    };
+    format!("{kind} of {component}")
 }

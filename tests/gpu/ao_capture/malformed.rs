@@ -56,6 +56,29 @@ fn bad_input_gives_a_one_line_error() {
         }),
     )
     .unwrap();
+    // Accessors read as another shape than they hold, and an animation channel that moves a
+    // node the file does not have: the glTF reader panics on each (`preflight.rs`).
+    let misread = |name: &str, edit: fn(&mut serde_json::Value)| {
+        let path = dir.join(format!("{name}.glb"));
+        std::fs::write(&path, edit_glb(&scene_bytes(), edit)).unwrap();
+        path
+    };
+    let float_indices = misread("float_indices", |json| {
+        let indices = json["meshes"][0]["primitives"][0]["indices"]
+            .as_u64()
+            .unwrap() as usize;
+        json["accessors"][indices]["componentType"] = 5126.into();
+    });
+    let missing_target = misread("missing_target", |json| {
+        json["animations"][0]["channels"][0]["target"]["node"] = 999.into();
+    });
+    let vector_times = misread("vector_times", |json| {
+        let sampler = &mut json["animations"][0]["samplers"][0];
+        sampler["input"] = sampler["output"].clone();
+    });
+    let weights_of_vectors = misread("weights_of_vectors", |json| {
+        json["animations"][0]["channels"][0]["target"]["path"] = "weights".into();
+    });
     // A camera with no view direction: Bevy's frustum update panics on it (with debug
     // assertions), or renders a view of nothing.
     let flat_camera = dir.join("flat_camera.glb");
@@ -187,6 +210,22 @@ fn bad_input_gives_a_one_line_error() {
         (
             base(&["--scene", flat_camera.to_str().unwrap()]),
             "the first camera's node has a zero scale",
+        ),
+        (
+            base(&["--scene", float_indices.to_str().unwrap()]),
+            "which holds SCALAR of FLOAT; indices are single unsigned integers",
+        ),
+        (
+            base(&["--scene", missing_target.to_str().unwrap()]),
+            "channel 0 of animation 0 moves node 999, and the file has 4 nodes",
+        ),
+        (
+            base(&["--scene", vector_times.to_str().unwrap()]),
+            "which holds VEC3 of FLOAT; key times are single floats",
+        ),
+        (
+            base(&["--scene", weights_of_vectors.to_str().unwrap()]),
+            "animates morph target weights from accessor",
         ),
     ];
     for (args, expected) in cases {
