@@ -5,8 +5,9 @@
 //!   it reports it);
 //! - a buffer view whose stride is shorter than the elements its accessors read;
 //! - an accessor read as elements of another shape than it holds: indices that are not single
-//!   unsigned integers, animation key times that are not single floats, key values of another
-//!   shape than their channel's property, inverse bind matrices that are not 4 × 4 floats;
+//!   unsigned integers, morph targets that are not three floats, animation key times that are
+//!   not single floats, key values of another shape than their channel's property, inverse bind
+//!   matrices that are not 4 × 4 floats;
 //! - an animation channel whose target node or sampler the file does not have.
 //!
 //! Bevy catches the loader's panic, but its message and backtrace end up on stderr; the capture
@@ -94,15 +95,33 @@ fn element_shapes(root: &json::Root) -> Option<String> {
     };
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
-            let Some(indices) = primitive.indices.map(|i| i.value()) else {
-                continue;
-            };
-            if let Some(found) = wrong(indices, Type::Scalar, &unsigned) {
+            if let Some(indices) = primitive.indices.map(|i| i.value())
+                && let Some(found) = wrong(indices, Type::Scalar, &unsigned)
+            {
                 return Some(format!(
                     "primitive {p} of mesh {m} reads its indices from accessor {indices}, which \
                      holds {}; indices are single unsigned integers",
                     describe(found)
                 ));
+            }
+            for (t, target) in primitive.targets.iter().flatten().enumerate() {
+                for (attribute, index) in [
+                    ("POSITION", target.positions),
+                    ("NORMAL", target.normals),
+                    ("TANGENT", target.tangents),
+                ] {
+                    let Some(index) = index.map(|i| i.value()) else {
+                        continue;
+                    };
+                    if let Some(found) = wrong(index, Type::Vec3, &[ComponentType::F32]) {
+                        return Some(format!(
+                            "morph target {t} of primitive {p} of mesh {m} reads its {attribute} \
+                             from accessor {index}, which holds {}; a morph target's {attribute} \
+                             is VEC3 of FLOAT",
+                            describe(found)
+                        ));
+                    }
+                }
             }
         }
     }

@@ -76,6 +76,11 @@ fn bad_input_gives_a_one_line_error() {
         let sampler = &mut json["animations"][0]["samplers"][0];
         sampler["input"] = sampler["output"].clone();
     });
+    let scalar_morph_target = misread("scalar_morph_target", |json| {
+        let indices = json["meshes"][0]["primitives"][0]["indices"].clone();
+        json["meshes"][0]["primitives"][0]["targets"] =
+            serde_json::json!([{ "POSITION": indices }]);
+    });
     let weights_of_vectors = misread("weights_of_vectors", |json| {
         json["animations"][0]["channels"][0]["target"]["path"] = "weights".into();
     });
@@ -222,6 +227,10 @@ fn bad_input_gives_a_one_line_error() {
         (
             base(&["--scene", vector_times.to_str().unwrap()]),
             "which holds VEC3 of FLOAT; key times are single floats",
+        ),
+        (
+            base(&["--scene", scalar_morph_target.to_str().unwrap()]),
+            "which holds SCALAR of UNSIGNED_INT; a morph target's POSITION is VEC3 of FLOAT",
         ),
         (
             base(&["--scene", weights_of_vectors.to_str().unwrap()]),
