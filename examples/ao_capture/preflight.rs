@@ -74,29 +74,44 @@ pub fn check(path: &Path) -> Result<(), String> {
 /// Indices are taken from the JSON and checked here: the validator leaves some unchecked, and
 /// the reader's own lookups unwrap them.
 fn element_shapes(root: &json::Root) -> Option<String> {
-    let shape = |index: usize| -> Option<(Type, ComponentType)> {
-        let accessor = root.accessors.get(index)?;
-        match (accessor.type_, accessor.component_type) {
-            (Checked::Valid(kind), Checked::Valid(component)) => Some((kind, component.0)),
-            _ => None,
+    mesh_faults(root)
+        .or_else(|| skin_faults(root))
+        .or_else(|| animation_faults(root))
+}
+
+/// Rotations and morph weights may be stored as floats or as normalized integers.
+const FLOAT_OR_NORMALIZED: [ComponentType; 5] = [
+    ComponentType::F32,
+    ComponentType::I8,
+    ComponentType::U8,
+    ComponentType::I16,
+    ComponentType::U16,
+];
+
+/// What accessor `index` holds, where that is not `kind` of one of `components`; `None` where it
+/// is, or where the file has no such accessor (the validator reports that).
+fn wrong_shape(
+    root: &json::Root,
+    index: usize,
+    kind: Type,
+    components: &[ComponentType],
+) -> Option<(Type, ComponentType)> {
+    let accessor = root.accessors.get(index)?;
+    match (accessor.type_, accessor.component_type) {
+        (Checked::Valid(k), Checked::Valid(c)) if k != kind || !components.contains(&c.0) => {
+            Some((k, c.0))
         }
-    };
+        _ => None,
+    }
+}
+
+/// Indices that are not single unsigned integers, morph targets that are not three floats.
+fn mesh_faults(root: &json::Root) -> Option<String> {
     let unsigned = [ComponentType::U8, ComponentType::U16, ComponentType::U32];
-    // Rotations and morph weights may also be stored as normalized integers.
-    let float_or_normalized = [
-        ComponentType::F32,
-        ComponentType::I8,
-        ComponentType::U8,
-        ComponentType::I16,
-        ComponentType::U16,
-    ];
-    let wrong = |index: usize, kind: Type, components: &[ComponentType]| {
-        shape(index).filter(|&(k, c)| k != kind || !components.contains(&c))
-    };
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             if let Some(indices) = primitive.indices.map(|i| i.value())
-                && let Some(found) = wrong(indices, Type::Scalar, &unsigned)
+                && let Some(found) = wrong_shape(root, indices, Type::Scalar, &unsigned)
             {
                 return Some(format!(
                     "primitive {p} of mesh {m} reads its indices from accessor {indices}, which \
@@ -113,7 +128,8 @@ fn element_shapes(root: &json::Root) -> Option<String> {
                     let Some(index) = index.map(|i| i.value()) else {
                         continue;
                     };
-                    if let Some(found) = wrong(index, Type::Vec3, &[ComponentType::F32]) {
+                    if let Some(found) = wrong_shape(root, index, Type::Vec3, &[ComponentType::F32])
+                    {
                         return Some(format!(
                             "morph target {t} of primitive {p} of mesh {m} reads its {attribute} \
                              from accessor {index}, which holds {}; a morph target's {attribute} \
@@ -125,11 +141,16 @@ fn element_shapes(root: &json::Root) -> Option<String> {
             }
         }
     }
+    None
+}
+
+/// Inverse bind matrices that are not 4 × 4 floats.
+fn skin_faults(root: &json::Root) -> Option<String> {
     for (s, skin) in root.skins.iter().enumerate() {
         let Some(matrices) = skin.inverse_bind_matrices.map(|i| i.value()) else {
             continue;
         };
-        if let Some(found) = wrong(matrices, Type::Mat4, &[ComponentType::F32]) {
+        if let Some(found) = wrong_shape(root, matrices, Type::Mat4, &[ComponentType::F32]) {
             return Some(format!(
                 "skin {s} reads its inverse bind matrices from accessor {matrices}, which holds \
                  {}; they are 4 × 4 matrices of floats",
@@ -137,6 +158,12 @@ fn element_shapes(root: &json::Root) -> Option<String> {
             ));
         }
     }
+    None
+}
+
+/// Channels that move a node or use a sampler the file does not have, key times that are not
+/// single floats, key values of another shape than the channel's property.
+fn animation_faults(root: &json::Root) -> Option<String> {
     for (a, animation) in root.animations.iter().enumerate() {
         for (c, channel) in animation.channels.iter().enumerate() {
             let node = channel.target.node.value();
@@ -154,7 +181,7 @@ fn element_shapes(root: &json::Root) -> Option<String> {
                 ));
             };
             let input = sampler.input.value();
-            if let Some(found) = wrong(input, Type::Scalar, &[ComponentType::F32]) {
+            if let Some(found) = wrong_shape(root, input, Type::Scalar, &[ComponentType::F32]) {
                 return Some(format!(
                     "channel {c} of animation {a} reads its key times from accessor {input}, \
                      which holds {}; key times are single floats",
@@ -176,20 +203,20 @@ fn element_shapes(root: &json::Root) -> Option<String> {
                 ),
                 Checked::Valid(Property::Rotation) => (
                     Type::Vec4,
-                    &float_or_normalized[..],
+                    &FLOAT_OR_NORMALIZED[..],
                     "a rotation",
                     "VEC4 of FLOAT or of normalized integers",
                 ),
                 Checked::Valid(Property::MorphTargetWeights) => (
                     Type::Scalar,
-                    &float_or_normalized[..],
+                    &FLOAT_OR_NORMALIZED[..],
                     "morph target weights",
                     "SCALAR of FLOAT or of normalized integers",
                 ),
                 Checked::Invalid => continue,
             };
             let output = sampler.output.value();
-            if let Some(found) = wrong(output, kind, components) {
+            if let Some(found) = wrong_shape(root, output, kind, components) {
                 return Some(format!(
                     "channel {c} of animation {a} animates {property} from accessor {output}, \
                      which holds {}; such a channel reads {takes}",
