@@ -11,7 +11,9 @@
 //! start inside grooves a pixel wide). A step is blocked
 //! where it lies behind the front layer and in front of the back-face layer at the pixel it
 //! projects to (inside a solid), or, where no back face was drawn there, less than R behind the
-//! front layer. A ray that leaves the screen meets, past the edge, the surface the edge pixel
+//! front layer. A ray that leaves the screen is judged as at a step where its image crosses the
+//! screen's edge (the next step may lie far past a surface it went through on screen: `toasters.glb`
+//! at R = 2 m 0.0382 → 0.0214 RMSE), and meets, past the edge, the surface the edge pixel there
 //! shows, continued as its tangent plane: a floor or wall running out of the view still occludes
 //! what stands near the edge (a plate beside the edge read 0.26 of the truth's 0.40 occlusion
 //! without it, 0.37 with it; room corner's converged default 0.026 → 0.020 RMSE), for about a

@@ -1,6 +1,6 @@
 //! The ray-marched reference on the CPU, step for step as `ray_march/march.wgsl` runs it.
 
-use bevy::math::{IVec2, Vec3, Vec4Swizzles};
+use bevy::math::{IVec2, Vec3, Vec4, Vec4Swizzles};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use super::sampling::{HASH_TO_UNIT, pcg_hash, tangent_frame};
@@ -163,46 +163,72 @@ pub fn ray_march_occlusion(
     nd.per_pixel(|x, y| pixel_occlusion(nd, view, inputs, x, y))
 }
 
-/// Whether the ray from view-space `origin` along unit `dir`, still free on screen at distance
-/// `on_screen` and off it at `left_at`, meets the tangent plane of the surface at the screen's
-/// edge where it left, off screen and within `radius`: `beyond_the_edge` in `march.wgsl`, which
+/// The share of the way from the last step on screen to the edge crossing that `edge_crossing`
+/// returns: `INSIDE_THE_EDGE` in `march.wgsl`.
+const INSIDE_THE_EDGE: f32 = 0.999;
+
+/// How far along the ray from view-space `origin` along `dir`, between `on_screen` (a step on
+/// screen) and `left_at` (the next, off it), its image leaves the screen, a little short of
+/// that: `edge_crossing` in `march.wgsl`, which says why.
+fn edge_crossing(
+    view: &ViewMatrices,
+    origin: Vec3,
+    dir: Vec3,
+    on_screen: f32,
+    left_at: f32,
+) -> f32 {
+    let clip = view.clip_from_view * origin.extend(1.0);
+    let clip_dir = view.clip_from_view * dir.extend(0.0);
+    let start = Vec4::splat(clip.w) + Vec4::new(-clip.x, clip.x, -clip.y, clip.y);
+    let rate =
+        Vec4::splat(clip_dir.w) + Vec4::new(-clip_dir.x, clip_dir.x, -clip_dir.y, clip_dir.y);
+    let t = (0..4)
+        .filter(|&i| rate[i] < 0.0)
+        .map(|i| -start[i] / rate[i])
+        .fold(left_at, f32::min)
+        .clamp(on_screen, left_at);
+    on_screen + (t - on_screen) * INSIDE_THE_EDGE
+}
+
+/// Whether the ray from view-space `origin` along unit `dir`, whose image reached the screen's
+/// edge at distance `edge` (`edge_crossing`), meets the tangent plane of the surface at the
+/// screen's edge there, off screen and within `radius`: `beyond_the_edge` in `march.wgsl`, which
 /// says why.
 fn beyond_the_edge(
     nd: &NdBuffer,
     view: &ViewMatrices,
     origin: Vec3,
     dir: Vec3,
-    on_screen: f32,
-    left_at: f32,
+    edge: f32,
     radius: f32,
 ) -> bool {
     let (w, h) = (nd.width, nd.height);
-    let exit = view.clip_from_view * (origin + dir * left_at).extend(1.0);
+    let exit = view.clip_from_view * (origin + dir * edge).extend(1.0);
     if exit.w <= 0.0 {
         return false;
     }
     let ndc = exit.xyz() / exit.w;
-    let edge = IVec2::new(
+    let pixel = IVec2::new(
         (((ndc.x + 1.0) * 0.5 * w as f32).floor() as i32).clamp(0, w as i32 - 1),
         (((1.0 - ndc.y) * 0.5 * h as f32).floor() as i32).clamp(0, h as i32 - 1),
     );
-    let Some(texel) = nd.texel(false, edge.x, edge.y) else {
+    let Some(texel) = nd.texel(false, pixel.x, pixel.y) else {
         return false;
     };
     if texel.depth <= 0.0 || texel.normal == Vec3::ZERO {
         return false;
     }
-    let e = view.view_position(edge.x, edge.y, w, h, texel.depth);
+    let e = view.view_position(pixel.x, pixel.y, w, h, texel.depth);
     let m = (view.view_from_world * texel.normal.extend(0.0))
         .xyz()
         .normalize();
     let up = facing_the_eye(view, m, e);
-    let start = (origin + dir * on_screen - e).dot(up);
+    let start = (origin + dir * edge - e).dot(up);
     let end = (origin + dir * radius - e).dot(up);
     if !(start > 0.0 && end < 0.0) {
         return false;
     }
-    let t = on_screen + (radius - on_screen) * start / (start - end);
+    let t = edge + (radius - edge) * start / (start - end);
     let meet = view.clip_from_view * (origin + dir * t).extend(1.0);
     if meet.w <= 0.0 {
         return true;
@@ -291,7 +317,12 @@ pub fn pixel_occlusion(
                     let previous = origin + dir * (t - stride).max(0.0);
                     came_through_from_behind(nd, view, origin + dir * t, previous, stride)
                 }) || left_at.is_some_and(|t| {
-                    beyond_the_edge(nd, view, origin, dir, on_screen, t, inputs.radius)
+                    // The ray at the screen's edge is judged as a step.
+                    let edge = edge_crossing(view, origin, dir, on_screen, t.max(on_screen));
+                    let at_edge = origin + dir * edge;
+                    let last = origin + dir * on_screen;
+                    blocked(nd, view, at_edge, last, edge - on_screen, inputs) == 1
+                        || beyond_the_edge(nd, view, origin, dir, edge, inputs.radius)
                 });
             hits += u32::from(hit);
         }
@@ -302,7 +333,9 @@ pub fn pixel_occlusion(
 
 #[cfg(test)]
 mod tests {
-    use super::step_at;
+    use bevy::math::{Mat4, Vec3, Vec4Swizzles};
+
+    use super::{ViewMatrices, edge_crossing, step_at};
 
     #[test]
     fn the_steps_reach_the_radius_in_order_whatever_the_offset() {
@@ -326,6 +359,39 @@ mod tests {
                 previous = t;
             }
             assert_eq!(previous, radius, "offset {offset}: the last step lies at R");
+        }
+    }
+
+    /// Whether view-space `p` projects inside the screen, and how far from its nearest edge in
+    /// normalized device coordinates.
+    fn inside_by(view: &ViewMatrices, p: Vec3) -> (bool, f32) {
+        let clip = view.clip_from_view * p.extend(1.0);
+        let ndc = clip.xy() / clip.w;
+        let inside = clip.w > 0.0 && ndc.abs().max_element() <= 1.0;
+        (inside, 1.0 - ndc.abs().max_element())
+    }
+
+    #[test]
+    fn the_edge_crossing_lies_just_inside_the_screen_even_past_the_camera_plane() {
+        let view = ViewMatrices::new(
+            Mat4::IDENTITY,
+            Mat4::perspective_infinite_reverse_rh(0.8, 4.0 / 3.0, 0.05),
+        );
+        let origin = Vec3::new(0.2, -0.3, -2.0);
+        // Off the side of the screen ahead of the camera, then towards the camera and past its
+        // plane, where the step off screen has no image at all.
+        for (dir, left_at) in [
+            (Vec3::new(1.0, 0.0, 0.0), 3.0),
+            (Vec3::new(0.0, -0.6, 0.8).normalize(), 4.0),
+        ] {
+            let (on_screen, _) = inside_by(&view, origin);
+            assert!(on_screen);
+            let t = edge_crossing(&view, origin, dir, 0.0, left_at);
+            let (inside, margin) = inside_by(&view, origin + dir * t);
+            assert!(inside && t > 0.0 && t < left_at, "{dir}: crossing at {t}");
+            assert!(margin < 0.01, "{dir}: {margin} from the edge at {t}");
+            let (past, _) = inside_by(&view, origin + dir * (t * 1.01 + 0.01));
+            assert!(!past, "{dir}: still on screen just after {t}");
         }
     }
 }

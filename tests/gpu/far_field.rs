@@ -227,18 +227,22 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// Each term joined to the crate's default image-space technique (the accumulated ray march) on
 /// characters standing on a floor, every mesh an occluder: never worse than the default alone at
 /// 0.75 m (within 0.0005), and at 2 m, where most of what occludes a character lies beyond the
-/// near field's reach, at least a tenth better, but for the voxels (at least 7%). At this size
-/// the default runs at full resolution (`DynamicAo::small_viewport_pixels`), which brought it
-/// alone closer to the truth than at half resolution and left the terms less to add. Measured:
-/// the walker 0.0222 alone at 0.75 m, 0.0211 / 0.0219 / 0.0209 joined (spheres / fields /
-/// voxels), at 2 m 0.0232 and 0.0203 / 0.0199 / 0.0211 (the voxels 0.91×); CesiumMan 0.0133 at
-/// 0.75 m, 0.0122 / 0.0134 / 0.0134, at 2 m 0.0199 and 0.0127 / 0.0132 / 0.0170 (the voxels
-/// 0.85×).
+/// near field's reach, better by at least 9% on the walker and a tenth on CesiumMan, but for the
+/// voxels (at least 4% and 5%). At this size the default runs at full resolution
+/// (`DynamicAo::small_viewport_pixels`), which brought it alone closer to the truth than at half
+/// resolution and left the terms less to add; so did judging a ray where it leaves the screen
+/// (`edge_crossing` in `march.wgsl`), which the joined images, whose march stops at
+/// `near_field_radius`, do not reach. Measured: the walker 0.0226 alone at 0.75 m, 0.0211 /
+/// 0.0219 / 0.0216 joined (spheres / fields / voxels), at 2 m 0.0228 and 0.0203 / 0.0199 /
+/// 0.0217 (0.89×, 0.87×, 0.95×; alone 0.0237 before the edge rule); CesiumMan 0.0134 at 0.75 m,
+/// 0.0122 / 0.0134 / 0.0130, at 2 m 0.0191 and 0.0127 / 0.0132 / 0.0166 (the voxels 0.87×;
+/// alone 0.0208 before).
 ///
 /// The Fox seen end-on (`far_scenes::fox_end_on`), where the default misses the shadow under the
-/// body, must keep at most 0.68× the default's error at 0.75 m and 0.75× at 2 m (the voxels
-/// 0.78×): measured 0.0302 alone at 0.75 m, 0.0200 / 0.0199 / 0.0168 joined (0.66×, 0.66×,
-/// 0.56×), at 2 m 0.0383 and 0.0274 / 0.0198 / 0.0222 (0.72×, 0.52×, 0.58×). While a skinned
+/// body, must keep at most 0.68× the default's error at 0.75 m and 0.85× at 2 m (the voxels
+/// 0.90×): measured 0.0301 alone at 0.75 m, 0.0200 / 0.0199 / 0.0159 joined (0.66×, 0.66×,
+/// 0.53×), at 2 m 0.0325 and 0.0274 / 0.0198 / 0.0218 (0.84×, 0.61×, 0.67×; alone 0.0384 and
+/// 0.71×, 0.52×, 0.57× before the edge rule). While a skinned
 /// mesh's lightest joint group joined the nearest centre rather than the group it touches, the
 /// Fox's two front feet shared one box, which walled off the floor between the legs: the spheres
 /// read 0.0214 (0.71×) and 0.0282 (0.74×), and fail here at 0.75 m. Before the boxes of a skinned
@@ -261,7 +265,7 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
     // Each scene with the share of the default's error a term may keep at 0.75 m (beyond the
     // 0.0005 of slack) and at 2 m.
-    let mut scenes = vec![(far_scenes::walker_on_floor(), None, 1.0, 0.9)];
+    let mut scenes = vec![(far_scenes::walker_on_floor(), None, 1.0, 0.91)];
     let shared = crate::models::shared_assets();
     if let Some(folder) = shared.as_ref().and_then(|p| p.to_str()) {
         scenes.extend(
@@ -270,7 +274,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
                 .filter(|s| s.name == "CesiumMan on floor")
                 .map(|s| (s, Some(folder), 1.0, 0.9)),
         );
-        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.68, 0.75));
+        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.68, 0.85));
     }
     let mut failed = Vec::new();
     for (scene, folder, near_share, far_share) in scenes {
@@ -293,7 +297,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
             2.0,
             |term, alone| {
                 if term == FarTerm::Voxels {
-                    (far_share + 0.03) * alone
+                    (far_share + 0.05) * alone
                 } else {
                     far_share * alone
                 }
@@ -314,8 +318,10 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// below), on the bumpy ring 1.06× joined to the near field at 0.75 m. Joined to the near field
 /// each term must lower the error at both radii, joined to the default at 0.75 m; at 2 m the
 /// default alone does better than either joined. Measured here, joined against alone, near field at
-/// 0.75 m and 2 m, then the default: spheres 0.63×, 0.46×, 0.97×, 1.92×; fields 0.70×, 0.55×,
-/// 0.77×, 1.16×. The default runs at full resolution at this size (`DynamicAo::small_viewport_pixels`),
+/// 0.75 m and 2 m, then the default: spheres 0.62×, 0.46×, 0.94×, 2.39×; fields 0.70×, 0.55×,
+/// 0.77×, 1.48×; the default alone at 2 m 0.0131 since a ray is judged where it leaves the screen
+/// (`edge_crossing` in `march.wgsl`; 0.0169 before, with 1.85× and 1.14×), the joined images as
+/// before: their march stops at `near_field_radius`, short of the screen's edge. The default runs at full resolution at this size (`DynamicAo::small_viewport_pixels`),
 /// which took it alone at 2 m from 0.0208 to 0.0166, while joined it reads 0.0318 and 0.0193 as at
 /// half resolution. At half resolution: spheres 0.63×, 0.46×, 0.96×, 1.55× (1.57× on an NVIDIA H200);
 /// fields 0.70×, 0.55×, 0.80×, 0.97× (the default's 0.74×, 1.43×, 0.67× and 1.02× before its rays'
@@ -354,7 +360,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.98), (2.0, 1.94)],
+            [(0.75, 0.98), (2.0, 2.45)],
         ),
         (
             FarTerm::Fields,
@@ -366,7 +372,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Fields,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.79), (2.0, 1.18)],
+            [(0.75, 0.79), (2.0, 1.52)],
         ),
     ];
     let mut failed = Vec::new();

@@ -34,7 +34,9 @@ fn many_rays(steps: u32) -> DynamicAo {
 
 /// The steps per ray, not the accumulation or the blur, are what the default's error on
 /// DamagedHelmet's panel lines and small parts comes from: more steps bring the ray march closer
-/// to the truth there. Prints the table of BENCHMARKS.md ("What limits it"). Every configuration
+/// to the truth there, over the helmet's pixels. Over the whole image (the floor around it
+/// included) 8 steps read as well as more since a ray is judged where it leaves the screen
+/// (`edge_crossing` in `march.wgsl`). Prints the table of BENCHMARKS.md ("What limits it"). Every configuration
 /// draws the full mesh's back faces (`coarse_back_faces` off): the steps are measured against
 /// the model's own surfaces, not a copy whose cells are coarser than the finest steps.
 #[test]
@@ -79,6 +81,7 @@ fn steps_limit_the_default_on_fine_detail() {
     ];
     let mut truth = None;
     let mut errors = Vec::new();
+    let mut helmet_errors = Vec::new();
     println!("| configuration | RMSE | helmet pixels | mean over truth, helmet | high-frequency |");
     for (name, ao) in configurations {
         run.image_space = DynamicAo {
@@ -104,24 +107,27 @@ fn steps_limit_the_default_on_fine_detail() {
             over / count
         );
         errors.push(error);
+        helmet_errors.push(helmet_error);
     }
-    let steps = &errors[4..8];
-    // Measured: 0.0365 / 0.0346 / 0.0345 / 0.0354 at 8 / 16 / 32 / 64 steps (0.037 / 0.035 /
-    // 0.034 / 0.035 before rays through a sheet towards the camera counted as blocked, and
-    // 0.047 / 0.039 / 0.035 / 0.033 before steps just behind the back-face layer did: each
-    // stands in for some of what finer steps found).
+    let steps = &helmet_errors[4..8];
+    // Measured over the helmet: 0.076 / 0.069 / 0.065 / 0.064 at 8 / 16 / 32 / 64 steps (0.081 /
+    // 0.071 / 0.066 / 0.064 before a ray was judged where it leaves the screen). Over the whole
+    // image 0.0346 / 0.0342 / 0.0344 / 0.0355 (0.0365 / 0.0346 / 0.0345 / 0.0354 before; 0.047 /
+    // 0.039 / 0.035 / 0.033 before steps just behind the back-face layer counted as blocked:
+    // each rule stands in for some of what finer steps found).
     assert!(
         steps[1] < 0.96 * steps[0] && steps[2] < steps[1] && steps[3] < steps[2] + 0.002,
-        "more steps per ray should bring the ray march closer to the truth: {steps:?}"
+        "more steps per ray should bring the ray march closer to the truth on the helmet: \
+         {steps:?}"
     );
-    // Measured: 2 × 16 steps 0.042 against the default's 2 × 6 steps 0.044 (0.053 against
-    // 0.063 before steps just behind the back-face layer counted as blocked). With the temporal
-    // clamp every other frame the default's own error fell more than 16 steps' did.
+    // Measured over the helmet: 2 × 16 steps 0.065 against the default's 2 × 6 steps 0.070; over
+    // the whole image 0.032 against 0.031, where the floor's error, which the steps do not
+    // change, outweighs the helmet's.
     assert!(
-        errors[3] < 0.98 * errors[0],
-        "16 steps per ray should lower the default's error: {:.4} against {:.4}",
-        errors[3],
-        errors[0]
+        helmet_errors[3] < 0.96 * helmet_errors[0],
+        "16 steps per ray should lower the default's error on the helmet: {:.4} against {:.4}",
+        helmet_errors[3],
+        helmet_errors[0]
     );
 }
 

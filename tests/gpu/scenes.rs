@@ -218,6 +218,18 @@ pub fn plate_by_the_edge() -> SceneSpec {
         )
 }
 
+/// A counter 3.2 × 0.9 × 1 m on a floor, seen from 3 m in front and above, as
+/// `assets/scenes/toasters.glb` frames its counter: the floor its front face sees runs off the
+/// bottom of the view a few decimetres in front of it.
+pub fn counter_on_floor() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(0.6, 2.2, 3.4).looking_at(Vec3::new(0.0, 0.9, 0.2), Vec3::Y))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(
+            Cuboid::new(3.2, 0.9, 1.0),
+            Transform::from_xyz(0.0, 0.45, 0.0),
+        )
+}
+
 /// Detail finer than a half-resolution texel: a heat sink (a 0.8 × 0.5 m base 4 cm thick carrying
 /// 20 fins 8 mm thick, 0.2 m tall and 4 cm apart, gaps of one to two pixels at 160 × 120) and
 /// beside it a grille of 12 upright bars 1 cm square and 3 cm apart, on a floor.
