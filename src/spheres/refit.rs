@@ -102,10 +102,23 @@ pub fn refit(
         // joints' blended matrix: turned, stretched and scaled with them, so one on a single
         // bone moves exactly with it (the spread of its vertices would grow as neighbouring parts
         // bend away).
-        let axes = match clustered.shape {
+        let mut axes = match clustered.shape {
             super::ProxyShape::Spheres => rest.axes * ratio,
             super::ProxyShape::Boxes => Mat3::from(linear) * rest.axes,
         };
+        if skin.is_none() && clustered.shape == super::ProxyShape::Boxes {
+            // No bone carries an unskinned box: morph targets reshape it, and it takes the
+            // shape of its vertices along each of its axes. Kept at its rest size, the box of
+            // AnimatedMorphCube, flattened to two thirds of its depth by a target, stood out of
+            // the cube's front face and darkened the floor there as if it lay inside the cube.
+            let stretch = box_stretch(mesh, members, &deform, rest.axes, linear);
+            let offset = rest.center - rest.centroid;
+            for (k, factor) in stretch.into_iter().enumerate() {
+                let along = rest.axes.col(k).normalize_or_zero();
+                *axes.col_mut(k) *= factor;
+                center += Mat3::from(linear) * (along * along.dot(offset) * (factor - 1.0));
+            }
+        }
         let radius = match clustered.shape {
             super::ProxyShape::Spheres => rest.radius * ratio,
             super::ProxyShape::Boxes => (axes.x_axis.length_squared()
@@ -125,6 +138,54 @@ pub fn refit(
         );
     }
     dropped
+}
+
+/// How much the deformed vertices `members` of a box (rest half-extent vectors `rest_axes`, mesh
+/// space) stretch along each of its axes against the rest mesh carried rigidly by `linear`: the
+/// ratio of their area-weighted spreads along the axis. An axis along which the rest vertices
+/// have no spread (a floor's thickness) keeps its size.
+fn box_stretch(
+    mesh: &RestMesh,
+    members: &[u32],
+    deform: &impl Fn(usize) -> Vec3A,
+    rest_axes: Mat3,
+    linear: Mat3A,
+) -> [f32; 3] {
+    // Each axis as a unit vector at rest (mesh space) and carried by `linear` (world space), with
+    // the length `linear` gives it.
+    let along = [0, 1, 2].map(|k| Vec3A::from(rest_axes.col(k).normalize_or_zero()));
+    let turned = along.map(|a| linear * a);
+    let scale = turned.map(|t| t.length());
+    let turned = [0, 1, 2].map(|k| turned[k] / scale[k].max(f32::MIN_POSITIVE));
+    // Sums relative to the first vertex keep the spreads accurate far from the origin.
+    let first = members[0] as usize;
+    let (rest_origin, origin) = (Vec3A::from(mesh.positions[first]), deform(first));
+    let mut area = 0.0f32;
+    let (mut rest, mut deformed) = ([[0.0f32; 2]; 3], [[0.0f32; 2]; 3]);
+    for &v in members {
+        let a = mesh.areas[v as usize];
+        let r = Vec3A::from(mesh.positions[v as usize]) - rest_origin;
+        let d = deform(v as usize) - origin;
+        area += a;
+        for k in 0..3 {
+            let (x, y) = (r.dot(along[k]), d.dot(turned[k]));
+            rest[k] = [rest[k][0] + x * a, rest[k][1] + x * x * a];
+            deformed[k] = [deformed[k][0] + y * a, deformed[k][1] + y * y * a];
+        }
+    }
+    let spread = |sums: [f32; 2]| {
+        let mean = sums[0] / area;
+        (sums[1] / area - mean * mean).max(0.0).sqrt()
+    };
+    [0, 1, 2].map(|k| {
+        let rest_spread = spread(rest[k]) * scale[k];
+        let size = scale[k] * rest_axes.col(k).length();
+        if area > 0.0 && rest_spread > 1e-3 * size {
+            spread(deformed[k]) / rest_spread
+        } else {
+            1.0
+        }
+    })
 }
 
 fn push_finite(out: &mut Vec<OccluderSphere>, dropped: &mut usize, proxy: OccluderSphere) {
@@ -150,7 +211,7 @@ fn max_axis_scale(m: Mat3A) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use bevy::math::{Quat, Vec3};
+    use bevy::math::{Quat, Vec3, Vec3Swizzles};
 
     use super::*;
     use crate::geometry::rest_mesh::VertexSkin;
@@ -295,6 +356,62 @@ mod tests {
         for (moved, rest) in spheres.iter().zip(&clustered.spheres) {
             let expected = rest.center + Vec3::new(1.0, 0.25, 0.0);
             assert!(moved.center.distance(expected) < 1e-4);
+        }
+    }
+
+    /// A unit cube, turned and moved, whose one morph target lifts its lower face by 0.5 m: at
+    /// full weight the box proxy is the cube's upper half (half its height, its centre 0.25 m
+    /// up); at rest size it stood out below the flattened cube.
+    #[test]
+    fn a_morph_target_that_flattens_a_box_flattens_its_proxy() {
+        use bevy::prelude::{Cuboid, Mesh};
+        let cube = RestMesh::from_mesh(&Mesh::from(Cuboid::new(1.0, 1.0, 1.0))).unwrap();
+        let lift: Vec<Vec3> = cube
+            .positions
+            .iter()
+            .map(|p| Vec3::new(0.0, if p.y < 0.0 { 0.5 } else { 0.0 }, 0.0))
+            .collect();
+        let indices: Vec<usize> = cube
+            .triangles
+            .iter()
+            .flatten()
+            .map(|&i| i as usize)
+            .collect();
+        let mesh = RestMesh::new(cube.positions.clone(), None, &indices, None, lift, 1).unwrap();
+        let clustered = crate::spheres::fit::fit_boxes(&mesh, 8);
+        assert_eq!(clustered.spheres.len(), 1);
+        let turn = Quat::from_rotation_z(0.4);
+        let world_from_mesh = Affine3A::from_rotation_translation(turn, Vec3::new(2.0, 1.0, 0.0));
+        for (weight, height, rise) in [(0.0, 1.0, 0.0), (0.5, 0.75, 0.125), (1.0, 0.5, 0.25)] {
+            let weights = [weight];
+            let pose = Pose {
+                world_from_mesh,
+                joints: &[],
+                morph_weights: &weights,
+            };
+            let mut boxes = Vec::new();
+            refit(&mesh, &clustered, &pose, &mut boxes);
+            let proxy = boxes[0];
+            // The box's extent along the mesh's turned y axis, whichever of its axes that is.
+            let up = turn * Vec3::Y;
+            let extent: f32 = (0..3).map(|k| proxy.axes.col(k).dot(up).abs()).sum::<f32>() * 2.0;
+            let centre = turn.inverse() * (proxy.center - Vec3::new(2.0, 1.0, 0.0));
+            let fitted = clustered.spheres[0].axes.y_axis.length() * 2.0;
+            assert!(
+                (extent - height * fitted).abs() < 0.02,
+                "weight {weight}: height {extent}, expected {}",
+                height * fitted
+            );
+            assert!(
+                (centre.y - rise).abs() < 0.02 && centre.xz().length() < 0.02,
+                "weight {weight}: centre {centre}"
+            );
+            for k in 0..3 {
+                let across = proxy.axes.col(k) - up * proxy.axes.col(k).dot(up);
+                let rest = clustered.spheres[0].axes.col(k);
+                let rest_across = rest - Vec3::Y * rest.y;
+                assert!((across.length() - rest_across.length()).abs() < 0.02);
+            }
         }
     }
 

@@ -232,17 +232,22 @@ fn joined_terms_are_never_worse_in_view_and_better_at_two_metres() {
 /// (`DynamicAo::small_viewport_pixels`), which brought it alone closer to the truth than at half
 /// resolution and left the terms less to add; so did judging a ray where it leaves the screen
 /// (`edge_crossing` in `march.wgsl`), which the joined images, whose march stops at
-/// `near_field_radius`, do not reach. Measured: the walker 0.0226 alone at 0.75 m, 0.0211 /
-/// 0.0219 / 0.0216 joined (spheres / fields / voxels), at 2 m 0.0228 and 0.0203 / 0.0199 /
-/// 0.0217 (0.89×, 0.87×, 0.95×; alone 0.0237 before the edge rule); CesiumMan 0.0134 at 0.75 m,
-/// 0.0122 / 0.0134 / 0.0130, at 2 m 0.0191 and 0.0127 / 0.0132 / 0.0166 (the voxels 0.87×;
+/// `near_field_radius`, do not reach. Measured: the walker 0.0226 alone at 0.75 m, 0.0208 /
+/// 0.0219 / 0.0216 joined (spheres / fields / voxels), at 2 m 0.0228 and 0.0190 / 0.0199 /
+/// 0.0217 (0.83×, 0.87×, 0.95×; alone 0.0237 before the edge rule); CesiumMan 0.0134 at 0.75 m,
+/// 0.0125 / 0.0134 / 0.0130, at 2 m 0.0191 and 0.0125 / 0.0132 / 0.0166 (the voxels 0.87×;
 /// alone 0.0208 before).
 ///
 /// The Fox seen end-on (`far_scenes::fox_end_on`), where the default misses the shadow under the
-/// body, must keep at most 0.68× the default's error at 0.75 m and 0.85× at 2 m (the voxels
-/// 0.90×): measured 0.0301 alone at 0.75 m, 0.0200 / 0.0199 / 0.0159 joined (0.66×, 0.66×,
-/// 0.53×), at 2 m 0.0325 and 0.0274 / 0.0198 / 0.0218 (0.84×, 0.61×, 0.67×; alone 0.0384 and
-/// 0.71×, 0.52×, 0.57× before the edge rule). While a skinned
+/// body, must keep at most 0.68× the default's error at 0.75 m and 0.89× at 2 m (the voxels
+/// 0.94×): measured 0.0301 alone at 0.75 m, 0.0202 / 0.0199 / 0.0159 joined (0.67×, 0.66×,
+/// 0.53×), at 2 m 0.0327 and 0.0287 / 0.0198 / 0.0218 (0.88×, 0.61×, 0.67×; alone 0.0384 and
+/// 0.71×, 0.52×, 0.57× before the edge rule). The spheres read 0.0200 and 0.0274 (0.84×) while
+/// compose joined a skinned mesh's share beyond the near field's reach to the near field as an
+/// independent occluder: under the body the union hides part of the far legs and belly that the
+/// floor sees beside the near ones; on the walker (0.0211 → 0.0208, 0.0203 → 0.0190) and
+/// CesiumMan (0.0122 → 0.0125, 0.0127 → 0.0125) the union moved them little, and on a ring it
+/// halved what the spheres added (`a_ring_on_a_floor_gains_from_its_proxies_and_its_field`). While a skinned
 /// mesh's lightest joint group joined the nearest centre rather than the group it touches, the
 /// Fox's two front feet shared one box, which walled off the floor between the legs: the spheres
 /// read 0.0214 (0.71×) and 0.0282 (0.74×), and fail here at 0.75 m. Before the boxes of a skinned
@@ -274,7 +279,7 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
                 .filter(|s| s.name == "CesiumMan on floor")
                 .map(|s| (s, Some(folder), 1.0, 0.9)),
         );
-        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.68, 0.85));
+        scenes.push((far_scenes::fox_end_on(), Some(folder), 0.68, 0.89));
     }
     let mut failed = Vec::new();
     for (scene, folder, near_share, far_share) in scenes {
@@ -318,8 +323,11 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// below), on the bumpy ring 1.06× joined to the near field at 0.75 m. Joined to the near field
 /// each term must lower the error at both radii, joined to the default at 0.75 m; at 2 m the
 /// default alone does better than either joined. Measured here, joined against alone, near field at
-/// 0.75 m and 2 m, then the default: spheres 0.62×, 0.46×, 0.94×, 2.39×; fields 0.70×, 0.55×,
-/// 0.77×, 1.48×; the default alone at 2 m 0.0131 since a ray is judged where it leaves the screen
+/// 0.75 m and 2 m, then the default: spheres 0.68×, 0.49×, 0.94×, 1.82×; fields 0.70×, 0.55×,
+/// 0.77×, 1.48×. Compose joins the ring's share beyond the near field's reach to what counts
+/// within it by their union, since the ring's near side, which the image-space technique counts,
+/// hides its far side from the floor beside it (`compose.wgsl`); joined independently the
+/// spheres read 0.62×, 0.46×, 0.94× and 2.39×, the floor in front of the ring too dark; the default alone at 2 m 0.0131 since a ray is judged where it leaves the screen
 /// (`edge_crossing` in `march.wgsl`; 0.0169 before, with 1.85× and 1.14×), the joined images as
 /// before: their march stops at `near_field_radius`, short of the screen's edge. The default runs at full resolution at this size (`DynamicAo::small_viewport_pixels`),
 /// which took it alone at 2 m from 0.0208 to 0.0166, while joined it reads 0.0318 and 0.0193 as at
@@ -360,7 +368,7 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.98), (2.0, 2.45)],
+            [(0.75, 0.98), (2.0, 1.9)],
         ),
         (
             FarTerm::Fields,
@@ -433,10 +441,23 @@ fn a_skinned_characters_proxies_cast_what_it_casts() {
         "{off} of {seen} pixels differ"
     );
 
-    let (proxies, walker) = far_scenes::model_proxies(run.gpu.app.world_mut());
+    // Measured: 6 % over within 0.75 m, 7 % within 2 m.
+    for (reach, ours, theirs) in proxies_against_their_model(&mut run, "walker") {
+        assert!(
+            (ours / theirs - 1.0).abs() < 0.10,
+            "R = {reach} m: proxies {ours} against the mesh's {theirs}"
+        );
+    }
+}
+
+/// The mean occlusion the model's proxies cast on the floor around it (as compose joins them) and
+/// the model's own (ray-traced), within each of `RADII`, as they are posed now in `run`.
+fn proxies_against_their_model(run: &mut FarRun, name: &str) -> Vec<(f32, f32, f32)> {
+    let (proxies, model) = far_scenes::model_proxies(run.gpu.app.world_mut());
     assert!(!proxies.is_empty());
-    let body = Bvh::new(walker.triangles.clone());
-    let floor = far_scenes::floor_points_around(&walker, &body);
+    let body = Bvh::new(model.triangles.clone());
+    let floor = far_scenes::floor_points_around(&model, &body);
+    let mut cast = Vec::new();
     for reach in RADII {
         let (mut ours, mut theirs, mut count) = (0.0, 0.0, 0);
         for &p in &floor {
@@ -446,17 +467,37 @@ fn a_skinned_characters_proxies_cast_what_it_casts() {
         }
         let (ours, theirs) = (ours / count as f32, theirs / count as f32);
         println!(
-            "walker, floor around it, R = {reach} m: {} proxies cast {ours:.4}, the mesh {theirs:.4}",
+            "{name}, floor around it, R = {reach} m: {} proxies cast {ours:.4}, the mesh {theirs:.4}",
             proxies.len()
         );
+        assert!(theirs > 0.02, "{name} should occlude the floor around it");
+        cast.push((reach, ours, theirs));
+    }
+    cast
+}
+
+/// AnimatedMorphCube at 0.7 s, where a morph target has flattened it to about two thirds of its
+/// depth: its box proxy takes the shape of the morphed vertices, and casts on the floor around it
+/// what the cube casts. At its rest size the box stood out of the cube's front face, and the
+/// floor points inside it read black (`ao_capture` at 160×120, the spheres alone: RMSE 0.0921
+/// at 0.73 m, 0.0242 now). Needs `../shared/assets`.
+#[test]
+fn a_morphed_models_box_takes_its_morphed_shape() {
+    let Some(folder) = crate::models::shared_assets() else {
+        println!("skipped: no ../shared/assets");
+        return;
+    };
+    let scene = far_scenes::third_party()
+        .into_iter()
+        .find(|s| s.name == "AnimatedMorphCube on floor")
+        .unwrap();
+    let mut run = FarRun::new(&scene, folder.to_str());
+    run.render(false, Some(FarTerm::Spheres), count_once(), 0.75);
+    // Measured: under 1 % over at both radii.
+    for (reach, ours, theirs) in proxies_against_their_model(&mut run, "AnimatedMorphCube") {
         assert!(
-            theirs > 0.02,
-            "the walker should occlude the floor around it"
-        );
-        // Measured: 6 % over within 0.75 m, 7 % within 2 m.
-        assert!(
-            (ours / theirs - 1.0).abs() < 0.10,
-            "proxies {ours} against the mesh's {theirs}"
+            (ours / theirs - 1.0).abs() < 0.03,
+            "R = {reach} m: proxies {ours} against the mesh's {theirs}"
         );
     }
 }
