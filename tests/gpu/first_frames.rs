@@ -13,8 +13,8 @@ use crate::harness::{Frame, Gpu, HEIGHT, WIDTH, largest_difference, plain_ao};
 use crate::scenes;
 
 /// Reads a new camera's frames one by one, for at most `reads`, until one shows the scene as
-/// `reference` does (the same ND-buffer; before that, meshes whose pipelines have not compiled are
-/// missing). Each read-back says the AO is not there yet (−1 everywhere) or is valid visibility,
+/// `reference` does (the same ND-buffer, both layers; before that, meshes whose pipelines have not
+/// compiled are missing from one or both). Each read-back says the AO is not there yet (−1 everywhere) or is valid visibility,
 /// and on the first frame with the whole scene it is `reference`'s AO: never the zeros of an
 /// unwritten texture, never Bevy's SSAO standing in. Returns the reads that said −1 and the read
 /// that matched.
@@ -35,7 +35,10 @@ fn read_until_the_scene_is_drawn(
             frame.visibility.iter().all(|v| (0.0..=1.0).contains(v)),
             "{what}: read-back {read} is neither visibility nor −1"
         );
-        if frame.nd.front != reference.nd.front {
+        // Each layer is drawn by pipelines of its own, which may compile frames apart: the
+        // ray march read its first frames with the front layer whole and the back-face layer
+        // not yet.
+        if frame.nd.front != reference.nd.front || frame.nd.back != reference.nd.back {
             continue;
         }
         let difference = largest_difference(&frame.visibility, &reference.visibility);
