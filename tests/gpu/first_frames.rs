@@ -35,9 +35,10 @@ fn read_until_the_scene_is_drawn(
             frame.visibility.iter().all(|v| (0.0..=1.0).contains(v)),
             "{what}: read-back {read} is neither visibility nor −1"
         );
-        // Each layer is drawn by pipelines of its own, which may compile frames apart: the
-        // ray march read its first frames with the front layer whole and the back-face layer
-        // not yet.
+        // Each layer is drawn by pipelines of its own, which may compile frames apart. In one
+        // fresh-clone run the ray march, the one technique here that reads the back-face layer,
+        // read 0.25 off the reference on the first frame whose front layer was whole; the back
+        // layer was not compared then.
         if frame.nd.front != reference.nd.front || frame.nd.back != reference.nd.back {
             continue;
         }
