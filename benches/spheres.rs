@@ -1,6 +1,6 @@
 //! CPU costs of sphere occluders: the per-frame refit of a skinned 10k-vertex mesh (the goal is
-//! under 0.1 ms per 10k vertices on one core in a release build), the refit of a rigid mesh,
-//! and the one-off Lloyd clustering.
+//! under 0.1 ms per 10k vertices on one core in a release build), the refit of a rigid mesh and
+//! of the boxes of a morphed one, and the one-off Lloyd clustering.
 //!
 //! `cargo bench --bench spheres`
 
@@ -11,6 +11,7 @@ use bevy_dynamic_ao::geometry::{
     rest_mesh::{RestMesh, VertexSkin},
 };
 use bevy_dynamic_ao::spheres::{
+    fit::fit_boxes,
     lloyd::{ClusteredMesh, cluster},
     refit::refit,
 };
@@ -86,6 +87,33 @@ fn benches(c: &mut Criterion) {
             refit(&mesh, &clustered, &pose, &mut out)
         })
     });
+    // The same sphere, unskinned, with one morph target that flattens it along y: its boxes take
+    // the morphed vertices' spread along each of their axes every frame.
+    let mut morphed = mesh.clone();
+    morphed.skin = None;
+    morphed.morph_positions = morphed
+        .positions
+        .iter()
+        .map(|p| Vec3::Y * -0.3 * p.y)
+        .collect();
+    morphed.morph_targets = 1;
+    let clustered = fit_boxes(&morphed, 16);
+    c.bench_function(
+        &format!(
+            "box_refit_morphed_{vertices}_vertices_{}_boxes",
+            clustered.spheres.len()
+        ),
+        |b| {
+            b.iter(|| {
+                let pose = Pose {
+                    world_from_mesh: Affine3A::from_translation(Vec3::X),
+                    joints: &[],
+                    morph_weights: &[0.5],
+                };
+                refit(&morphed, &clustered, &pose, &mut out)
+            })
+        },
+    );
     c.bench_function(
         &format!("lloyd_cluster_{vertices}_vertices_16_spheres"),
         |b| b.iter(|| cluster(&mesh, 16)),

@@ -8,7 +8,7 @@
 //! it is pushed inwards and kept inside the surface. That matters because A_ψ = 1 inside a
 //! sphere (§6): a sphere poking out of the mesh would black out the object's own surface.
 
-use bevy::math::{Mat3, Vec3};
+use bevy::math::{Mat3, Vec3, Vec3A};
 
 use crate::geometry::bvh::Bvh;
 use crate::geometry::hash::pcg_hash;
@@ -39,6 +39,51 @@ pub struct RestSphere {
     /// Area-weighted RMS distance of the cluster's vertices from `centroid` (0 when they
     /// coincide), metres.
     pub spread: f32,
+    /// Area-weighted RMS spread of the cluster's vertices along each of `axes`' directions, mesh
+    /// space, metres: what the refit holds a morphed box's vertices against, so that the box
+    /// takes their shape.
+    pub axis_spreads: Vec3,
+}
+
+/// The area-weighted RMS spread of the rest vertices `members` along each of the directions of
+/// `axes` (mesh space), metres; 0 where they carry no area. Computed once per fit, for
+/// the refit of a morphed box (`refit::box_stretch`).
+pub(crate) fn rest_axis_spreads(mesh: &RestMesh, members: &[u32], axes: Mat3) -> Vec3 {
+    let along = [0, 1, 2].map(|k| Vec3A::from(axes.col(k).normalize_or_zero()));
+    let points = members.iter().map(|&v| {
+        let v = v as usize;
+        (mesh.areas[v], Vec3A::from(mesh.positions[v]))
+    });
+    Vec3::from(axis_spreads(points, along))
+}
+
+/// The area-weighted RMS spread of `points` (area m², position) along each of the unit
+/// directions `along`, metres; 0 where they carry no area.
+pub(crate) fn axis_spreads(
+    mut points: impl Iterator<Item = (f32, Vec3A)>,
+    along: [Vec3A; 3],
+) -> [f32; 3] {
+    let Some((first_area, origin)) = points.next() else {
+        return [0.0; 3];
+    };
+    // Sums relative to the first point keep the spreads accurate far from the origin.
+    let mut area = first_area;
+    let mut sums = [[0.0f32; 2]; 3];
+    for (a, p) in points {
+        let d = p - origin;
+        area += a;
+        for k in 0..3 {
+            let x = d.dot(along[k]);
+            sums[k] = [sums[k][0] + x * a, sums[k][1] + x * x * a];
+        }
+    }
+    if area <= 0.0 {
+        return [0.0; 3];
+    }
+    sums.map(|[sum, squares]| {
+        let mean = sum / area;
+        (squares / area - mean * mean).max(0.0).sqrt()
+    })
 }
 
 /// A mesh cut into clusters, with vertex data sorted by cluster so the refit walks memory in
@@ -229,12 +274,14 @@ fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere>
             (center, radius) = (centroid + inward * t, r);
         }
     }
-    (radius > 1e-6 && radius.is_finite()).then_some(RestSphere {
+    let axes = Mat3::from_diagonal(Vec3::splat(radius));
+    (radius > 1e-6 && radius.is_finite()).then(|| RestSphere {
         center,
         radius,
-        axes: Mat3::from_diagonal(Vec3::splat(radius)),
+        axes,
         centroid,
         spread,
+        axis_spreads: rest_axis_spreads(mesh, members, axes),
     })
 }
 

@@ -11,7 +11,7 @@
 use bevy::math::{Affine3A, Mat3, Mat3A, Vec3, Vec3A};
 
 use super::OccluderSphere;
-use super::lloyd::ClusteredMesh;
+use super::lloyd::{ClusteredMesh, RestSphere, axis_spreads};
 use crate::geometry::deform::{Deformer, Pose};
 use crate::geometry::rest_mesh::RestMesh;
 
@@ -46,16 +46,30 @@ pub fn refit(
     }
 
     let deformer = Deformer::new(mesh, pose);
-    let deform = |v: usize| deformer.point(v);
+    // No bone carries an unskinned box: it takes the shape of its morphed vertices, which are
+    // walked twice (centroid, then spread per axis) and so deformed once, into `deformed`.
+    let morphed_boxes = skin.is_none() && clustered.shape == super::ProxyShape::Boxes;
+    let mut deformed: Vec<Vec3A> = Vec::new();
 
     for (i, rest) in clustered.spheres.iter().enumerate() {
         let (start, end) = clustered.ranges[i];
         let members = &clustered.order[start as usize..end as usize];
+        if morphed_boxes {
+            deformed.clear();
+            deformed.extend(members.iter().map(|&v| deformer.point(v as usize)));
+        }
+        let at = |j: usize| {
+            if morphed_boxes {
+                deformed[j]
+            } else {
+                deformer.point(members[j] as usize)
+            }
+        };
         // Sums relative to the first vertex keep the spread accurate far from the origin.
-        let origin = deform(members[0] as usize);
+        let origin = at(0);
         let (mut area, mut sum, mut sum2) = (0.0f32, Vec3A::ZERO, 0.0f32);
-        for &v in members {
-            let d = deform(v as usize) - origin;
+        for (j, &v) in members.iter().enumerate() {
+            let d = at(j) - origin;
             let a = mesh.areas[v as usize];
             area += a;
             sum += d * a;
@@ -106,12 +120,14 @@ pub fn refit(
             super::ProxyShape::Spheres => rest.axes * ratio,
             super::ProxyShape::Boxes => Mat3::from(linear) * rest.axes,
         };
-        if skin.is_none() && clustered.shape == super::ProxyShape::Boxes {
-            // No bone carries an unskinned box: morph targets reshape it, and it takes the
-            // shape of its vertices along each of its axes. Kept at its rest size, the box of
-            // AnimatedMorphCube, flattened to two thirds of its depth by a target, stood out of
-            // the cube's front face and darkened the floor there as if it lay inside the cube.
-            let stretch = box_stretch(mesh, members, &deform, rest.axes, linear);
+        if morphed_boxes {
+            // Morph targets reshape an unskinned box, and it takes the shape of its vertices
+            // along each of its axes. Kept at its rest size, the box of AnimatedMorphCube,
+            // flattened to two thirds of its depth by a target, stood out of the cube's front
+            // face and darkened the floor there as if it lay inside the cube.
+            let points = members.iter().zip(&deformed);
+            let points = points.map(|(&v, &p)| (mesh.areas[v as usize], p));
+            let stretch = box_stretch(points, rest, linear);
             let offset = rest.center - rest.centroid;
             for (k, factor) in stretch.into_iter().enumerate() {
                 let along = rest.axes.col(k).normalize_or_zero();
@@ -140,48 +156,26 @@ pub fn refit(
     dropped
 }
 
-/// How much the deformed vertices `members` of a box (rest half-extent vectors `rest_axes`, mesh
-/// space) stretch along each of its axes against the rest mesh carried rigidly by `linear`: the
-/// ratio of their area-weighted spreads along the axis. An axis along which the rest vertices
-/// have no spread (a floor's thickness) keeps its size.
+/// How much the deformed vertices of a box, `points` (area m², world position), stretch along
+/// each of its axes against its rest vertices (`rest`, mesh space) carried rigidly by `linear`:
+/// the ratio of their area-weighted spreads along the axis. An axis along which the rest
+/// vertices have no spread (a floor's thickness) keeps its size.
 fn box_stretch(
-    mesh: &RestMesh,
-    members: &[u32],
-    deform: &impl Fn(usize) -> Vec3A,
-    rest_axes: Mat3,
+    points: impl Iterator<Item = (f32, Vec3A)>,
+    rest: &RestSphere,
     linear: Mat3A,
 ) -> [f32; 3] {
-    // Each axis as a unit vector at rest (mesh space) and carried by `linear` (world space), with
-    // the length `linear` gives it.
-    let along = [0, 1, 2].map(|k| Vec3A::from(rest_axes.col(k).normalize_or_zero()));
-    let turned = along.map(|a| linear * a);
+    // Each axis carried by `linear` (world space), as a unit vector and the length `linear`
+    // gives it.
+    let turned = [0, 1, 2].map(|k| linear * Vec3A::from(rest.axes.col(k).normalize_or_zero()));
     let scale = turned.map(|t| t.length());
     let turned = [0, 1, 2].map(|k| turned[k] / scale[k].max(f32::MIN_POSITIVE));
-    // Sums relative to the first vertex keep the spreads accurate far from the origin.
-    let first = members[0] as usize;
-    let (rest_origin, origin) = (Vec3A::from(mesh.positions[first]), deform(first));
-    let mut area = 0.0f32;
-    let (mut rest, mut deformed) = ([[0.0f32; 2]; 3], [[0.0f32; 2]; 3]);
-    for &v in members {
-        let a = mesh.areas[v as usize];
-        let r = Vec3A::from(mesh.positions[v as usize]) - rest_origin;
-        let d = deform(v as usize) - origin;
-        area += a;
-        for k in 0..3 {
-            let (x, y) = (r.dot(along[k]), d.dot(turned[k]));
-            rest[k] = [rest[k][0] + x * a, rest[k][1] + x * x * a];
-            deformed[k] = [deformed[k][0] + y * a, deformed[k][1] + y * y * a];
-        }
-    }
-    let spread = |sums: [f32; 2]| {
-        let mean = sums[0] / area;
-        (sums[1] / area - mean * mean).max(0.0).sqrt()
-    };
+    let deformed = axis_spreads(points, turned);
     [0, 1, 2].map(|k| {
-        let rest_spread = spread(rest[k]) * scale[k];
-        let size = scale[k] * rest_axes.col(k).length();
-        if area > 0.0 && rest_spread > 1e-3 * size {
-            spread(deformed[k]) / rest_spread
+        let rest_spread = rest.axis_spreads[k] * scale[k];
+        let size = scale[k] * rest.axes.col(k).length();
+        if rest_spread > 1e-3 * size {
+            deformed[k] / rest_spread
         } else {
             1.0
         }

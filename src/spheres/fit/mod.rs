@@ -28,7 +28,7 @@ mod tests;
 use bevy::math::{IVec3, Mat3, Vec3};
 use bevy::platform::collections::HashSet;
 
-use super::lloyd::{ClusteredMesh, RestSphere, sphere_joints};
+use super::lloyd::{ClusteredMesh, RestSphere, rest_axis_spreads, sphere_joints};
 use crate::geometry::rest_mesh::RestMesh;
 use cluster::Cluster;
 use samples::{Sample, cell_size, solid_samples};
@@ -215,6 +215,7 @@ fn group_vertices(mesh: &RestMesh, boxes: &[(Vec3, Mat3)]) -> ClusteredMesh {
             axes: *axes,
             centroid,
             spread,
+            axis_spreads: rest_axis_spreads(mesh, &members, *axes),
         });
     }
     clustered
