@@ -5,7 +5,8 @@ use bevy::ecs::prelude::*;
 use bevy::log::error;
 use bevy::platform::collections::HashSet;
 use bevy::render::render_resource::{CachedPipelineState, PipelineCache, PipelineDescriptor};
-use bevy::shader::ShaderCacheError;
+
+use crate::view::retried;
 
 /// Every pipeline of this crate has a label that starts so.
 const LABEL_PREFIX: &str = "dynamic_ao";
@@ -32,11 +33,7 @@ pub(super) fn report_failed_pipelines(
         let CachedPipelineState::Err(error) = &pipeline.state else {
             continue;
         };
-        // These two are retried by the cache.
-        if matches!(
-            error,
-            ShaderCacheError::ShaderNotLoaded(_) | ShaderCacheError::ShaderImportNotYetAvailable
-        ) {
+        if retried(error) {
             continue;
         }
         let label = match &pipeline.descriptor {

@@ -40,7 +40,7 @@ use bevy::render::{
 
 use crate::capabilities;
 use crate::schedule::{DynamicAoExtract, DynamicAoPrepare, DynamicAoSystems};
-use crate::view::{PendingPasses, drop_without_ao};
+use crate::view::{AoPassesReady, PendingPasses, drop_without_ao};
 
 /// Registers the compose pass, the hand-off to PBR and the debug view.
 pub struct ComposePlugin;
@@ -111,11 +111,6 @@ impl Plugin for ComposePlugin {
             );
     }
 }
-
-/// Marks a view whose passes have all compiled: from then on ours write the AO texture, not
-/// Bevy's SSAO.
-#[derive(Component)]
-pub(crate) struct AoPassesReady;
 
 /// Bevy's SSAO pass only runs on views that carry its pipeline id; taking it away hands the
 /// texture to us. Until every pass the view needs has compiled (pipelines compile in the

@@ -10,10 +10,10 @@ use bevy::render::{
     view::{ViewTarget, ViewUniformOffset},
 };
 
-use super::AoPassesReady;
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
 use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
+use crate::view::AoPassesReady;
 use crate::view::{DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
 
 pub(crate) fn compose_pass(

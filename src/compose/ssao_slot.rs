@@ -40,9 +40,9 @@ use bevy::render::{
     view::Msaa,
 };
 
-use super::AoPassesReady;
 use super::pipeline::bevy_ssao_format;
 use crate::settings::DynamicAo;
+use crate::view::AoPassesReady;
 use crate::view::{DynamicAoView, view_texture};
 
 /// Marks a render-world view whose `ScreenSpaceAmbientOcclusion` this module inserted (an MSAA

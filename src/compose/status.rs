@@ -8,16 +8,17 @@ use bevy::pbr::SsaoPipelineId;
 use bevy::reflect::Reflect;
 use bevy::render::{MainWorld, render_resource::PipelineCache, sync_world::MainEntity};
 
-use super::{AoPassesReady, FailedPipelines, bevy_ssao_runs};
+use super::{FailedPipelines, bevy_ssao_runs};
 use crate::settings::{AoTechnique, DynamicAo};
-use crate::view::{DynamicAoUniform, DynamicAoView};
+use crate::view::{AoPassesReady, DynamicAoUniform, DynamicAoView};
 
 /// What a camera's ambient occlusion texture held on a rendered frame.
 #[derive(Reflect, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum AoShown {
     /// Nothing the camera asked for: its passes are still compiling (their shaders wait on the
-    /// asset loader, or are reloading), and Bevy's SSAO, or open visibility, stands in. Also a
-    /// camera that did not render (inactive, or no longer carrying [`DynamicAo`]).
+    /// asset loader, or are reloading), or, before its first frame shown, the pipelines that
+    /// draw its meshes into the back-face layer are; Bevy's SSAO, or open visibility, stands in.
+    /// Also a camera that did not render (inactive, or no longer carrying [`DynamicAo`]).
     #[default]
     Pending,
     /// What the camera's [`DynamicAo`] asks for: the plugin's technique and far-field terms, or

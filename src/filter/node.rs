@@ -11,8 +11,8 @@ use bevy::render::{
 
 use super::bind_groups::{BlurBindGroups, UpsampleBindGroup, VisibilityBindGroup};
 use super::pipeline::BlurPipelines;
-use crate::compose::AoPassesReady;
 use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
+use crate::view::AoPassesReady;
 use crate::view::DynamicAoUniform;
 
 /// The pipeline and bind group of a view's last filter pass: `own`, or once our passes write

@@ -94,6 +94,7 @@ impl Plugin for NdBufferPlugin {
                     front_layer::prepare_front_layer_copies.in_set(RenderSystems::PrepareResources),
                     coarse::prepare_coarse_back_faces.in_set(RenderSystems::PrepareBindGroups),
                     front_layer::wait_for_front_layer_copy.in_set(DynamicAoPrepare::Readiness),
+                    phase::wait_for_layer_draws.in_set(DynamicAoPrepare::Readiness),
                     front_layer::prepare_front_layer_copy_bind_groups
                         .in_set(DynamicAoPrepare::BindGroups),
                     drop_without_ao::<(

@@ -17,13 +17,14 @@ use bevy::render::{
         CachedRenderPipelinePhaseItem, DrawFunctionId, PhaseItem, PhaseItemExtraIndex,
         SetItemPipeline, SortedPhaseItem, ViewSortedRenderPhases,
     },
-    render_resource::CachedRenderPipelineId,
+    render_resource::{CachedRenderPipelineId, PipelineCache},
     sync_world::MainEntity,
     view::{ExtractedView, RetainedViewEntity},
 };
 use indexmap::IndexMap;
 
 use crate::settings::DynamicAo;
+use crate::view::{AoPassesReady, PendingPasses, still_compiling};
 
 /// One mesh drawn into a layer of the ND-buffer drawn by this crate: the back faces when `BACK`
 /// ([`BackFace3d`]), else the front faces' depth at pixel centres ([`CentreSample3d`]).
@@ -155,4 +156,29 @@ pub(crate) fn extract_layer_phases<const BACK: bool>(
         live.insert(view);
     }
     phases.retain(|view, _| live.contains(view));
+}
+
+/// Until a view first shows its AO, it also waits for the pipelines that draw its meshes into
+/// the back-face layer and the centre sample: each mesh's own, compiled in the background like
+/// the passes', and until then missing from the layer. Without this the first frame shown could
+/// read a back layer that still lacked meshes the front layer held (in one CI run the ray march
+/// read 0.25 off). Once shown, a mesh whose pipeline compiles later (one spawned with a new
+/// vertex layout) is drawn from the frame it is ready, as Bevy draws it, rather than sending the
+/// camera back to Bevy's SSAO meanwhile. A pipeline that failed for good is not waited for: an
+/// error names it, and the layer goes without that mesh.
+pub(crate) fn wait_for_layer_draws(
+    pipeline_cache: Res<PipelineCache>,
+    back: Res<ViewSortedRenderPhases<BackFace3d>>,
+    centre: Res<ViewSortedRenderPhases<CentreSample3d>>,
+    mut views: Query<(&ExtractedView, &mut PendingPasses), Without<AoPassesReady>>,
+) {
+    for (view, mut pending) in &mut views {
+        let key = view.retained_view_entity;
+        let back = back.get(&key).into_iter().flat_map(|p| p.items.values());
+        let centre = centre.get(&key).into_iter().flat_map(|p| p.items.values());
+        let mut pipelines = back
+            .map(|item| item.pipeline)
+            .chain(centre.map(|item| item.pipeline));
+        pending.wait_for(!pipelines.any(|id| still_compiling(&pipeline_cache, id)));
+    }
 }

@@ -10,8 +10,8 @@ use bevy::render::{
 };
 
 use super::pipeline::{ReadbackBindGroup, ReadbackPipeline};
-use crate::compose::{AoPassesReady, AoShown, FailedPipelines, bevy_ssao_runs, shown};
-use crate::view::{DynamicAoUniform, DynamicAoView};
+use crate::compose::{AoShown, FailedPipelines, bevy_ssao_runs, shown};
+use crate::view::{AoPassesReady, DynamicAoUniform, DynamicAoView};
 
 pub(crate) fn readback_pass(
     view: ViewQuery<(

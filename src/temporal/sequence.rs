@@ -13,8 +13,8 @@ use bevy::ecs::prelude::*;
 use bevy::math::UVec2;
 use bevy::render::camera::ExtractedCamera;
 
-use crate::compose::AoPassesReady;
 use crate::settings::DynamicAo;
+use crate::view::AoPassesReady;
 use crate::view::{DynamicAoUniform, DynamicAoView};
 
 /// Frames a view has accumulated since its history last started over.

@@ -30,9 +30,11 @@ use crate::settings::{AoTechnique, DynamicAo};
 
 mod cameras;
 mod layers;
+mod readiness;
 mod uniform;
 
 pub(crate) use layers::{layer_bits, on_every_layer_of};
+pub(crate) use readiness::{AoPassesReady, retried, still_compiling};
 pub(crate) use uniform::DynamicAoUniform;
 
 /// Format of the back-face normal layer: the same encoding as Bevy's normal prepass.

@@ -13,11 +13,12 @@ use crate::harness::{Frame, Gpu, HEIGHT, WIDTH, largest_difference, plain_ao};
 use crate::scenes;
 
 /// Reads a new camera's frames one by one, for at most `reads`, until one shows the scene as
-/// `reference` does (the same ND-buffer, both layers; before that, meshes whose pipelines have not
-/// compiled are missing from one or both). Each read-back says the AO is not there yet (−1 everywhere) or is valid visibility,
-/// and on the first frame with the whole scene it is `reference`'s AO: never the zeros of an
-/// unwritten texture, never Bevy's SSAO standing in. Returns the reads that said −1 and the read
-/// that matched.
+/// `reference` does (the same front layer; before that, meshes whose prepass pipelines have not
+/// compiled are missing from it). Each read-back says the AO is not there yet (−1 everywhere) or
+/// is valid visibility; one that shows AO never holds a back-face layer that lacks meshes the
+/// front layer holds; and on the first frame with the whole scene it is `reference`'s AO: never
+/// the zeros of an unwritten texture, never Bevy's SSAO standing in. Returns the reads that said
+/// −1 and the read that matched.
 fn read_until_the_scene_is_drawn(
     gpu: &mut Gpu,
     reference: &Frame,
@@ -35,13 +36,18 @@ fn read_until_the_scene_is_drawn(
             frame.visibility.iter().all(|v| (0.0..=1.0).contains(v)),
             "{what}: read-back {read} is neither visibility nor −1"
         );
-        // Each layer is drawn by pipelines of its own, which may compile frames apart. In one
-        // fresh-clone run the ray march, the one technique here that reads the back-face layer,
-        // read 0.25 off the reference on the first frame whose front layer was whole; the back
-        // layer was not compared then.
-        if frame.nd.front != reference.nd.front || frame.nd.back != reference.nd.back {
+        if frame.nd.front != reference.nd.front {
             continue;
         }
+        // The back-face layer is drawn by pipelines of its own, compiled apart from the front
+        // layer's; the AO waits for them (`wait_for_layer_draws`). In one fresh-clone run before
+        // it did, the ray march, the one technique here that reads the back layer, read 0.25 off
+        // the reference on the first frame whose front layer was whole.
+        assert!(
+            frame.nd.back == reference.nd.back,
+            "{what}: read-back {read} shows AO over a whole front layer and an incomplete back \
+             layer"
+        );
         let difference = largest_difference(&frame.visibility, &reference.visibility);
         println!(
             "{what}: {not_yet} read-backs said −1; the whole scene at read-back {read}, largest \
@@ -110,6 +116,51 @@ fn while_a_pass_waits_for_its_shader_the_read_back_says_so_and_then_returns_the_
     let difference = largest_difference(&after.visibility, &ours.visibility);
     println!("with the shader back: largest difference from before {difference}");
     assert!(difference < 1e-4, "the AO did not come back: {difference}");
+}
+
+/// A new camera whose back-face layer cannot be drawn yet (the layer's shaders taken out, as while
+/// they load) shows no AO over a back layer that lacks the scene's meshes: its read-back says
+/// −1 until the shaders are back, and then it is the camera's own AO. The ray march reads the
+/// back layer; the coarse copies, which have a pass of their own, are off. Before the AO waited
+/// for the meshes' layer pipelines (`wait_for_layer_draws`), this camera showed the ray march
+/// over an empty back layer.
+#[test]
+fn a_new_camera_waits_for_the_meshes_of_its_back_face_layer() {
+    let scene = scenes::cube_on_plane();
+    let ao = DynamicAo {
+        coarse_back_faces: false,
+        ..plain_ao().with_technique(AoTechnique::RayMarch)
+    };
+    let mut gpu = Gpu::new(&scene, ao.clone());
+    let reference = gpu.frame(4);
+    let shaders = [
+        gpu.take_shader("nd_buffer/back_depth.wgsl"),
+        gpu.take_shader("nd_buffer/layer_normals.wgsl"),
+    ];
+    gpu.update(2);
+    let (camera, readback) = gpu.add_camera(scene.camera, ao);
+    gpu.update(8);
+    let meanwhile = gpu.visibility_of_each_now(&[&readback]).remove(0);
+    assert!(
+        meanwhile.iter().all(|v| *v == -1.0),
+        "while its back layer cannot be drawn, the new camera should show no AO: it reads {} to {}",
+        meanwhile.iter().copied().fold(f32::MAX, f32::min),
+        meanwhile.iter().copied().fold(f32::MIN, f32::max)
+    );
+    for shader in shaders {
+        gpu.restore_shader(shader);
+    }
+    let after = gpu.frame_of(camera, &readback, 2);
+    assert!(
+        after.nd.back == reference.nd.back,
+        "the back layer did not come back"
+    );
+    let difference = largest_difference(&after.visibility, &reference.visibility);
+    println!("with the shaders back: largest difference from the first camera {difference}");
+    assert!(
+        difference < 1e-4,
+        "the new camera's AO is not the scene's: {difference}"
+    );
 }
 
 /// A camera of its own rendering `transform` into a new target, with `ao` if given; the target.
