@@ -13,8 +13,7 @@ use bevy::render::{
 use super::debug_view::{DebugViewBindGroup, DebugViewPipelineId};
 use super::pipeline::{ComposeBindGroup, ComposePipeline};
 use crate::dispatch::{ComputeStep, SpanStart, Workgroup, record_passes};
-use crate::view::AoPassesReady;
-use crate::view::{DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
+use crate::view::{AoPassesReady, DynamicAoUniform, DynamicAoView, FilterWritesVisibility};
 
 pub(crate) fn compose_pass(
     view: ViewQuery<(

@@ -42,8 +42,7 @@ use bevy::render::{
 
 use super::pipeline::bevy_ssao_format;
 use crate::settings::DynamicAo;
-use crate::view::AoPassesReady;
-use crate::view::{DynamicAoView, view_texture};
+use crate::view::{AoPassesReady, DynamicAoView, view_texture};
 
 /// Marks a render-world view whose `ScreenSpaceAmbientOcclusion` this module inserted (an MSAA
 /// camera), not Bevy's extraction.

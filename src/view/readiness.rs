@@ -5,8 +5,9 @@ use bevy::ecs::prelude::*;
 use bevy::render::render_resource::{CachedPipelineState, CachedRenderPipelineId, PipelineCache};
 use bevy::shader::ShaderCacheError;
 
-/// Marks a view whose passes have all compiled: from then on ours write the AO texture, not
-/// Bevy's SSAO.
+/// Marks a view whose passes have all compiled (and, before its first frame shown, the pipelines
+/// that draw its meshes into our layers): from then on ours write the AO texture, not Bevy's
+/// SSAO.
 #[derive(Component)]
 pub(crate) struct AoPassesReady;
 
