@@ -14,7 +14,7 @@ use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 /// those that share a layer of its `RenderLayers` (the mesh entity's own, as Bevy reads them).
 ///
 /// By default the proxies are oriented boxes that fill the mesh's solid ([`ProxyShape::Boxes`]):
-/// one for a box, a wall or a floor, a few for a character. Each blocks exactly the share of a
+/// one for a box, a wall or a floor, a few for a character, a ball for a round rigid part. Each blocks exactly the share of a
 /// receiver's ambient light its faces cover within the camera's radius. The paper's own proxies,
 /// spheres inside the surface with influence cut off where it falls below ε (eq. 5), are the
 /// options [`ProxyShape::Spheres`] and [`ProxyReach::Epsilon`].
@@ -49,7 +49,9 @@ pub struct SphereOccluder {
 #[reflect(Default, Clone, Debug, PartialEq, Hash)]
 pub enum ProxyShape {
     /// Oriented boxes fitted to the mesh's solid (see [`fit`](super::fit)); a box's occlusion is
-    /// the cosine-weighted solid angle of its faces (Lambert's formula for polygons).
+    /// the cosine-weighted solid angle of its faces (Lambert's formula for polygons). A part of
+    /// an unskinned mesh whose silhouettes a ball matches better than its box gets a ball, whose
+    /// box would stick out at its corners.
     #[default]
     Boxes,
     /// Spheres inside the surface at the clusters of a Lloyd clustering of the vertices (the

@@ -43,6 +43,10 @@ pub struct RestSphere {
     /// space, metres: what the refit holds a morphed box's vertices against, so that the box
     /// takes their shape.
     pub axis_spreads: Vec3,
+    /// What this proxy is: a box fit gives a round part of an unskinned mesh a ball
+    /// ([`ProxyShape::Spheres`](super::ProxyShape::Spheres)), which the refit moves as it moves
+    /// the boxes (and sizes to the volume of a morphed box).
+    pub shape: super::ProxyShape,
 }
 
 /// The area-weighted RMS spread of the rest vertices `members` along each of the directions of
@@ -282,6 +286,7 @@ fn fit_sphere(mesh: &RestMesh, bvh: &Bvh, members: &[u32]) -> Option<RestSphere>
         centroid,
         spread,
         axis_spreads: rest_axis_spreads(mesh, members, axes),
+        shape: super::ProxyShape::Spheres,
     })
 }
 

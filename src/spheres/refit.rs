@@ -38,7 +38,7 @@ pub fn refit(
                     center: pose.world_from_mesh.transform_point3(s.center),
                     radius: s.radius * scale,
                     axes: linear * s.axes,
-                    shape: clustered.shape,
+                    shape: s.shape,
                 },
             );
         }
@@ -135,12 +135,24 @@ pub fn refit(
                 center += Mat3::from(linear) * (along * along.dot(offset) * (factor - 1.0));
             }
         }
-        let radius = match clustered.shape {
-            super::ProxyShape::Spheres => rest.radius * ratio,
-            super::ProxyShape::Boxes => (axes.x_axis.length_squared()
+        let radius = match (clustered.shape, rest.shape) {
+            (super::ProxyShape::Spheres, _) => rest.radius * ratio,
+            (super::ProxyShape::Boxes, super::ProxyShape::Boxes) => (axes.x_axis.length_squared()
                 + axes.y_axis.length_squared()
                 + axes.z_axis.length_squared())
             .sqrt(),
+            (super::ProxyShape::Boxes, super::ProxyShape::Spheres) => {
+                // A box fit's ball, moved (and stretched by a morph) as its boxes are: the ball
+                // of the same volume.
+                let lengths = Vec3::new(
+                    axes.x_axis.length(),
+                    axes.y_axis.length(),
+                    axes.z_axis.length(),
+                );
+                let r = lengths.element_product().cbrt();
+                axes = Mat3::from_diagonal(Vec3::splat(r));
+                r
+            }
         };
         push_finite(
             out,
@@ -149,7 +161,7 @@ pub fn refit(
                 center,
                 radius,
                 axes,
-                shape: clustered.shape,
+                shape: rest.shape,
             },
         );
     }

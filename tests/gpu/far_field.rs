@@ -323,8 +323,9 @@ fn every_term_joined_to_the_default_helps_characters_on_a_floor() {
 /// below), on the bumpy ring 1.06× joined to the near field at 0.75 m. Joined to the near field
 /// each term must lower the error at both radii, joined to the default at 0.75 m; at 2 m the
 /// default alone does better than either joined. Measured here, joined against alone, near field at
-/// 0.75 m and 2 m, then the default: spheres 0.68×, 0.49×, 0.94×, 1.82×; fields 0.70×, 0.55×,
-/// 0.77×, 1.48×. Compose joins the ring's share beyond the near field's reach to what counts
+/// 0.75 m and 2 m, then the default: spheres 0.70×, 0.51×, 0.93×, 1.70×; fields 0.70×, 0.55×,
+/// 0.77×, 1.48×. The spheres read 0.68×, 0.49×, 0.94× and 1.82× before the fit gave round parts
+/// a ball (pieces of the ring's tube are round enough). Compose joins the ring's share beyond the near field's reach to what counts
 /// within it by their union, since the ring's near side, which the image-space technique counts,
 /// hides its far side from the floor beside it (`compose.wgsl`); joined independently the
 /// spheres read 0.62×, 0.46×, 0.94× and 2.39×, the floor in front of the ring too dark; the default alone at 2 m 0.0131 since a ray is judged where it leaves the screen
@@ -362,13 +363,13 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
             FarTerm::Spheres,
             "near",
             plain_ao(),
-            [(0.75, 0.7), (2.0, 0.55)],
+            [(0.75, 0.72), (2.0, 0.55)],
         ),
         (
             FarTerm::Spheres,
             "default",
             DynamicAo::default(),
-            [(0.75, 0.98), (2.0, 1.9)],
+            [(0.75, 0.98), (2.0, 1.78)],
         ),
         (
             FarTerm::Fields,
@@ -499,6 +500,49 @@ fn a_morphed_models_box_takes_its_morphed_shape() {
             (ours / theirs - 1.0).abs() < 0.03,
             "R = {reach} m: proxies {ours} against the mesh's {theirs}"
         );
+    }
+}
+
+/// The ball near the wall takes a ball for its proxy, not a box (a round part's silhouettes match
+/// a ball's better), and with the wall's box it casts on the floor around them what the two
+/// meshes cast, ray-traced, point by point. Measured: an RMS difference of 0.0158 within 0.75 m
+/// and 0.0256 within 2 m; the ball's box read 0.0162 and 0.0280, its corners over the floor in
+/// front of the ball (`ao_capture` on a bumpy ball beside a slab, joined to the default: 0.0260 →
+/// 0.0227 at 0.73 m, 0.0289 → 0.0242 at 2 m).
+#[test]
+fn a_balls_proxy_is_a_ball() {
+    let scene = far_scenes::procedural()
+        .into_iter()
+        .find(|s| s.name == "ball near wall")
+        .unwrap();
+    let mut run = FarRun::new(&scene, None);
+    run.render(false, Some(FarTerm::Spheres), count_once(), 0.75);
+    let (proxies, model) = far_scenes::model_proxies(run.gpu.app.world_mut());
+    let shapes: Vec<ProxyShape> = proxies.iter().map(|p| p.shape).collect();
+    assert!(
+        shapes.contains(&ProxyShape::Spheres) && shapes.contains(&ProxyShape::Boxes),
+        "the wall a box, the ball a ball: {shapes:?}"
+    );
+    let body = Bvh::new(model.triangles.clone());
+    let floor = far_scenes::floor_points_around(&model, &body);
+    for (reach, bound) in [(0.75, 0.0165), (2.0, 0.027)] {
+        let (mut squares, mut ours, mut theirs) = (0.0, 0.0, 0.0);
+        for &p in &floor {
+            let cast = far_scenes::proxies_on_floor(&proxies, p, reach)[0];
+            let truth = point_occlusion(&body, p, Vec3::Y, reach, 1024);
+            squares += (cast - truth) * (cast - truth);
+            ours += cast;
+            theirs += truth;
+        }
+        let n = floor.len() as f32;
+        let error = (squares / n).sqrt();
+        println!(
+            "ball and wall, floor around them, R = {reach} m: proxies cast {:.4}, the meshes {:.4}, \
+             RMS difference {error:.4}",
+            ours / n,
+            theirs / n
+        );
+        assert!(error < bound, "R = {reach} m: RMS difference {error}");
     }
 }
 

@@ -1,7 +1,7 @@
 //! One cluster of samples, its principal-axis box, how well the box fills its silhouette, and
 //! the 2-means split of a cluster in two.
 
-use bevy::math::{Mat3, Vec3};
+use bevy::math::{Mat3, Vec2, Vec3};
 
 use super::frame::*;
 use super::samples::Sample;
@@ -169,34 +169,124 @@ impl Cluster {
         )
     }
 
+    /// The ball that stands for the cluster where it is round: centred on its box, with the
+    /// cluster's silhouette area averaged over 13 directions (`mean_directions`) as its disk's.
+    pub(super) fn proxy_ball(&self, cell: f32) -> (Vec3, f32) {
+        let mean_area = mean_directions()
+            .map(|d| self.silhouette_area(self.axes * d, cell))
+            .sum::<f32>()
+            / mean_directions().count() as f32;
+        (self.center, (mean_area / std::f32::consts::PI).sqrt())
+    }
+
+    /// How well a proxy's silhouettes cover the cluster's: over the 13 directions of
+    /// `mean_directions`, the cells of a grid that both cover over the cells that either does
+    /// (intersection over union), a cell counting for the proxy where its centre lies in the
+    /// proxy's projection. `ball` is `Some(radius)` for a ball at `centre`, `None` for the box
+    /// `centre` ± `axes`' columns.
+    pub(super) fn silhouette_match(
+        &self,
+        centre: Vec3,
+        axes: Mat3,
+        ball: Option<f32>,
+        cell: f32,
+    ) -> f32 {
+        let (mut both, mut either) = (0usize, 0usize);
+        for d in mean_directions() {
+            let direction = self.axes * d;
+            let points = self.projected(direction);
+            let (u, v) = direction.any_orthonormal_pair();
+            let flat = |p: Vec3| Vec2::new(u.dot(p), v.dot(p));
+            let c = flat(centre);
+            // A box projects to the sum of its three projected half-axes (a zonotope), whose
+            // edges run along them: a point lies in it where, measured across each half-axis,
+            // its offset from the centre is within the three half-axes' extent.
+            let generators = [0, 1, 2].map(|k| flat(axes.col(k)));
+            let reach = match ball {
+                Some(r) => Vec2::splat(r),
+                None => generators.iter().fold(Vec2::ZERO, |m, g| m + g.abs()),
+            };
+            let inside = |q: Vec2| match ball {
+                Some(r) => q.distance_squared(c) <= r * r,
+                None => generators.iter().all(|g| {
+                    let n = g.perp();
+                    let extent: f32 = generators.iter().map(|h| n.dot(*h).abs()).sum();
+                    g.length_squared() <= f32::MIN_POSITIVE || n.dot(q - c).abs() <= extent
+                }),
+            };
+            let (lo, hi) = bounds(&points, c - reach, c + reach);
+            let grid = Occupancy::new(&points, lo, hi, cell);
+            let (cu, cv) = grid.cells;
+            for j in 0..cv {
+                for i in 0..cu {
+                    let at = Vec2::new((i as f32 + 0.5) / cu as f32, (j as f32 + 0.5) / cv as f32);
+                    let (ours, theirs) = (inside(lo + grid.span * at), grid.covered[i + cu * j]);
+                    both += usize::from(ours && theirs);
+                    either += usize::from(ours || theirs);
+                }
+            }
+        }
+        if either == 0 {
+            0.0
+        } else {
+            both as f32 / either as f32
+        }
+    }
+
     /// The area of the samples' silhouette seen along unit `direction`: occupied cells of a grid
     /// over its bounds, less half of those on its edge.
     pub(super) fn silhouette_area(&self, direction: Vec3, cell: f32) -> f32 {
+        let points = self.projected(direction);
+        let (lo, hi) = bounds(&points, Vec2::INFINITY, Vec2::NEG_INFINITY);
+        let grid = Occupancy::new(&points, lo, hi, cell);
+        // A flat cluster seen edge-on has no area.
+        edge_corrected_share(&grid.covered, grid.cells.0, grid.cells.1)
+            * (hi.x - lo.x)
+            * (hi.y - lo.y)
+    }
+
+    /// The samples seen along unit `direction`, in a plane across it.
+    fn projected(&self, direction: Vec3) -> Vec<Vec2> {
         let (u, v) = direction.any_orthonormal_pair();
-        let points: Vec<(f32, f32)> = self
-            .samples
+        self.samples
             .iter()
-            .map(|s| (u.dot(s.position), v.dot(s.position)))
-            .collect();
-        let (mut lo, mut hi) = (
-            (f32::INFINITY, f32::INFINITY),
-            (f32::NEG_INFINITY, f32::NEG_INFINITY),
-        );
-        for &(a, b) in &points {
-            lo = (lo.0.min(a), lo.1.min(b));
-            hi = (hi.0.max(a), hi.1.max(b));
-        }
-        let cells = |span: f32| ((span / cell).ceil() as usize).clamp(1, SILHOUETTE_CELLS);
-        let (cu, cv) = (cells(hi.0 - lo.0), cells(hi.1 - lo.1));
-        let (su, sv) = ((hi.0 - lo.0).max(1e-12), (hi.1 - lo.1).max(1e-12));
+            .map(|s| Vec2::new(u.dot(s.position), v.dot(s.position)))
+            .collect()
+    }
+}
+
+/// The bounds of `points` and of the rectangle `lo`–`hi`.
+fn bounds(points: &[Vec2], lo: Vec2, hi: Vec2) -> (Vec2, Vec2) {
+    points
+        .iter()
+        .fold((lo, hi), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+}
+
+/// Which cells of a grid over `lo`–`hi` (square cells of about `cell`, at most
+/// `SILHOUETTE_CELLS` a side) hold a point.
+struct Occupancy {
+    covered: Vec<bool>,
+    /// Cells along each side.
+    cells: (usize, usize),
+    /// The grid's size, never 0.
+    span: Vec2,
+}
+
+impl Occupancy {
+    fn new(points: &[Vec2], lo: Vec2, hi: Vec2, cell: f32) -> Self {
+        let count = |span: f32| ((span / cell).ceil() as usize).clamp(1, SILHOUETTE_CELLS);
+        let (cu, cv) = (count(hi.x - lo.x), count(hi.y - lo.y));
+        let span = (hi - lo).max(Vec2::splat(1e-12));
         let mut covered = vec![false; cu * cv];
-        for &(a, b) in &points {
-            let i = (((a - lo.0) / su * cu as f32) as usize).min(cu - 1);
-            let j = (((b - lo.1) / sv * cv as f32) as usize).min(cv - 1);
+        for p in points {
+            let i = (((p.x - lo.x) / span.x * cu as f32) as usize).min(cu - 1);
+            let j = (((p.y - lo.y) / span.y * cv as f32) as usize).min(cv - 1);
             covered[i + cu * j] = true;
         }
-        let share = edge_corrected_share(&covered, cu, cv);
-        // A flat cluster seen edge-on has no area.
-        share * (hi.0 - lo.0) * (hi.1 - lo.1)
+        Self {
+            covered,
+            cells: (cu, cv),
+            span,
+        }
     }
 }

@@ -1,4 +1,5 @@
-//! Fitting a mesh with a few oriented boxes that fill its shape, the default far-field proxies.
+//! Fitting a mesh with a few oriented boxes (and balls, for round parts) that fill its shape, the
+//! default far-field proxies.
 //!
 //! Shanmugam & Arikan's spheres sit inside the surface (§5), so a set of them fills only part of
 //! a box, and none fits a floor or a wall, which enclose no volume. The occlusion an object casts
@@ -15,6 +16,9 @@
 //! 3. Each box is the cluster's principal-axis bounding box, shrunk per axis so that its
 //!    silhouette along each axis has the area the cluster's own silhouette has: a ball's box
 //!    covers the ball's disk face-on.
+//! 4. A round cluster of an unskinned mesh gets a ball instead, of its mean silhouette's area,
+//!    where the ball's silhouettes match the cluster's better than the box's do (and match
+//!    well): a box round a ball sticks out at its corners.
 //!
 //! Few boxes matter: proxies are splatted independently, so proxies one behind the other both
 //! count (multiplied as independent occluders), which overstates what they block together.
@@ -28,6 +32,7 @@ mod tests;
 use bevy::math::{IVec3, Mat3, Vec3};
 use bevy::platform::collections::HashSet;
 
+use super::ProxyShape;
 use super::lloyd::{ClusteredMesh, RestSphere, rest_axis_spreads, sphere_joints};
 use crate::geometry::rest_mesh::RestMesh;
 use cluster::Cluster;
@@ -37,6 +42,9 @@ use samples::{Sample, cell_size, solid_samples};
 const CELLS: f32 = 40.0;
 /// Silhouette fill below which a cluster is split.
 const GOOD_FILL: f32 = 0.75;
+/// Silhouette match (intersection over union, `Cluster::silhouette_match`) a ball needs to stand
+/// for a cluster: a ball matches itself to 0.94 on the fit's grid, a cube's ball 0.75.
+const ROUND: f32 = 0.8;
 /// Cells of the occupancy grid a silhouette is measured on, per side at most.
 const SILHOUETTE_CELLS: usize = 24;
 /// 2-means iterations per split.
@@ -80,8 +88,35 @@ pub fn fit_boxes(mesh: &RestMesh, count: u32) -> ClusteredMesh {
             .partial_cmp(&b.center.to_array())
             .unwrap_or(std::cmp::Ordering::Equal)
     });
-    let boxes: Vec<(Vec3, Mat3)> = clusters.iter().map(|c| c.proxy_box(cell)).collect();
-    group_vertices(mesh, &boxes)
+    // A skinned mesh's parts keep their boxes: the splat spares a receiver on the surface of a
+    // character's box (its own relief, which the near field reads), and a ball, which has no
+    // faces, would cover a whole hemisphere of the skin inside it (a part each of CesiumMan and
+    // the walker took a ball, and the spheres alone read 0.016 → 0.018 on CesiumMan).
+    let balls = mesh.skin.is_none();
+    let proxies: Vec<Proxy> = clusters.iter().map(|c| proxy(c, cell, balls)).collect();
+    group_vertices(mesh, &proxies)
+}
+
+/// A fitted proxy: centre, half-extent vectors (columns; a ball's all of its radius) and shape.
+type Proxy = (Vec3, Mat3, ProxyShape);
+
+/// A cluster's box, or (where `balls`) a ball where the cluster is round: where a ball covers its
+/// silhouettes better than its box does, and well (`ROUND`). A round part's box sticks out at its
+/// corners, and a floor under those corners has the box's lower face overhead (the box of a ball
+/// on a floor darkened the floor in front of it). Parts that match neither well keep their box:
+/// a ball would stand in for the two walls of a room's corner.
+fn proxy(cluster: &Cluster, cell: f32, balls: bool) -> Proxy {
+    let (centre, axes) = cluster.proxy_box(cell);
+    if !balls {
+        return (centre, axes, ProxyShape::Boxes);
+    }
+    let (ball_centre, radius) = cluster.proxy_ball(cell);
+    let as_ball = cluster.silhouette_match(ball_centre, axes, Some(radius), cell);
+    if as_ball >= ROUND && as_ball > cluster.silhouette_match(centre, axes, None, cell) {
+        (ball_centre, cluster.axes * radius, ProxyShape::Spheres)
+    } else {
+        (centre, axes, ProxyShape::Boxes)
+    }
 }
 
 /// A skinned mesh starts from one cluster per joint (by the joint that moves each sample most).
@@ -159,8 +194,8 @@ const NEIGHBOURS: [IVec3; 27] = {
 
 /// Every vertex joins the box nearest to it (0 inside); each box's refit data comes from its
 /// vertices.
-fn group_vertices(mesh: &RestMesh, boxes: &[(Vec3, Mat3)]) -> ClusteredMesh {
-    let outside = |p: Vec3, (center, axes): &(Vec3, Mat3)| {
+fn group_vertices(mesh: &RestMesh, boxes: &[Proxy]) -> ClusteredMesh {
+    let outside = |p: Vec3, (center, axes, _): &Proxy| {
         let d = p - *center;
         let mut excess = Vec3::ZERO;
         for i in 0..3 {
@@ -182,10 +217,10 @@ fn group_vertices(mesh: &RestMesh, boxes: &[(Vec3, Mat3)]) -> ClusteredMesh {
         members[nearest].push(v as u32);
     }
     let mut clustered = ClusteredMesh {
-        shape: super::ProxyShape::Boxes,
+        shape: ProxyShape::Boxes,
         ..ClusteredMesh::default()
     };
-    for ((center, axes), members) in boxes.iter().zip(members) {
+    for ((center, axes, shape), members) in boxes.iter().zip(members) {
         if members.is_empty() {
             continue;
         }
@@ -209,13 +244,17 @@ fn group_vertices(mesh: &RestMesh, boxes: &[(Vec3, Mat3)]) -> ClusteredMesh {
         clustered.sphere_joints.push(sphere_joints(mesh, &members));
         clustered.spheres.push(RestSphere {
             center: *center,
-            radius: (axes.x_axis + axes.y_axis + axes.z_axis)
-                .length()
-                .max(axes.x_axis.length()),
+            radius: match shape {
+                ProxyShape::Spheres => axes.x_axis.length(),
+                ProxyShape::Boxes => (axes.x_axis + axes.y_axis + axes.z_axis)
+                    .length()
+                    .max(axes.x_axis.length()),
+            },
             axes: *axes,
             centroid,
             spread,
             axis_spreads: rest_axis_spreads(mesh, &members, *axes),
+            shape: *shape,
         });
     }
     clustered
