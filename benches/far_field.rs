@@ -157,6 +157,7 @@ fn main() {
 
     let mut scenes: Vec<FarScene> = far_scenes::procedural();
     scenes.push(far_scenes::walker_on_floor());
+    scenes.push(far_scenes::frame_on_floor());
     if shared.is_some() {
         scenes.extend(far_scenes::third_party());
     }

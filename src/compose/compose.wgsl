@@ -10,8 +10,10 @@
 // torso), and the product counts the hidden part too; their union is taken halfway between the
 // largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
 // rule measured against ray-traced proxies (see `spheres`); a closed rigid mesh with several
-// proxies (a ring) joins them the same way. Other proxies (walls, floors, boxy props) multiply:
-// inside a room the walls lie in different directions and hide nothing of one another. Counted
+// proxies (a ring) joins them the same way, and an open one (a frame, a room) where the receiver
+// lies outside its proxies' bounds, with whatever stands inside them (`spheres::join`). Other
+// proxies (walls, floors, boxy props) multiply: inside a room the walls lie in different
+// directions and hide nothing of one another. Counted
 // once: within the near field's reach the larger of the near field and the red
 // channel counts, because what the ND-buffer misses is most often the hidden side of what it
 // shows (the two cover the same directions); beyond it, the green channel joins as an
@@ -87,10 +89,10 @@ fn halfway(largest: f32, product: f32) -> f32 {
     return largest + 0.5 * (product - largest);
 }
 
-// Both channels of the proxies' product `occlusion` scaled so that the proxies of skinned meshes
-// (whose product leaves `articulated_open` open, the largest single one blocking `largest`) count
-// halfway between that largest one and their product, and every other proxy joins as an
-// independent occluder.
+// Both channels of the proxies' product `occlusion` scaled so that the proxies that join by their
+// union here (`spheres::join`; their product leaves `articulated_open` open, the largest single
+// one blocks `largest`) count halfway between that largest one and their product, and every other
+// proxy joins as an independent occluder.
 fn sphere_union(occlusion: vec2<f32>, articulated_open: f32, largest: f32) -> vec2<f32> {
     let product = 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y);
     if product <= 0.0 {

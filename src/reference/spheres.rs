@@ -9,6 +9,7 @@ use bevy::math::{Mat3, Vec2, Vec3};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::geometry::cap::{cap_occlusion, share_beyond};
+use crate::spheres::join::proxy_joins;
 use crate::spheres::{OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
 
 /// √π / 2: half the side of the square with the area of the unit disk.
@@ -143,9 +144,10 @@ pub struct ProxyCamera {
 }
 
 /// The proxies' union, as `compose.wgsl` takes it: both channels of their product
-/// (`occlusion`) scaled so that the proxies of skinned meshes (whose product leaves
-/// `articulated_open` open, the largest single one blocking `largest`) count halfway between that
-/// largest one and their product, and every other proxy joins as an independent occluder.
+/// (`occlusion`) scaled so that the proxies that join by their union at the receiver
+/// ([`ProxyJoin`](crate::spheres::join::ProxyJoin); their product leaves `articulated_open` open,
+/// the largest single one blocks `largest`) count halfway between that largest one and their
+/// product, and every other proxy joins as an independent occluder.
 pub fn sphere_union(occlusion: [f32; 2], articulated_open: f32, largest: f32) -> [f32; 2] {
     let product = 1.0 - (1.0 - occlusion[0]) * (1.0 - occlusion[1]);
     if product <= 0.0 {
@@ -175,27 +177,22 @@ pub fn far_field_channels(
         point: &|x, tolerance| nd.holds(view, camera.use_back, x, tolerance),
         face: &|x, f| view.seen_face(x, f),
     };
+    let joins = proxy_joins(occluders);
     nd.per_receiver(view, |receiver| {
         let (p, n) = (receiver.world_position, receiver.texel.normal);
         let (mut open, mut articulated_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
-        for occluder in occluders {
+        for (occluder, join) in occluders.iter().zip(&joins) {
+            let by_union = join.joins_at(p);
             for proxy in &occluder.spheres {
                 let (extent, reach) = influence(proxy, occluder.reach, camera.radius);
                 if p.distance(proxy.center) > extent {
                     continue;
                 }
-                let [a, b] = proxy_channels(
-                    proxy,
-                    occluder.articulated,
-                    p,
-                    n,
-                    reach,
-                    camera.near_radius,
-                    &held,
-                );
+                let [a, b] =
+                    proxy_channels(proxy, by_union, p, n, reach, camera.near_radius, &held);
                 open[0] *= 1.0 - a;
                 open[1] *= 1.0 - b;
-                if occluder.articulated {
+                if by_union {
                     let both = 1.0 - (1.0 - a) * (1.0 - b);
                     articulated_open *= 1.0 - both;
                     largest = largest.max(both);
@@ -239,12 +236,12 @@ impl HeldByNd<'static> {
 }
 
 /// One proxy's occlusion in the two channels `splat.wgsl` writes: the part within `near` (> 0)
-/// the ND-buffer does not hold (by `held`; for the boxes of an `articulated` mesh, nothing of a
-/// face from a receiver within 0.1 `near` of its plane), and the share of the rest; with `near`
-/// ≤ 0, (0, all).
+/// the ND-buffer does not hold (by `held`; for the boxes that join the others `by_union` at the
+/// receiver, nothing of a face from a receiver within 0.1 `near` of its plane), and the share of
+/// the rest; with `near` ≤ 0, (0, all).
 pub fn proxy_channels(
     proxy: &OccluderSphere,
-    articulated: bool,
+    by_union: bool,
     p: Vec3,
     n: Vec3,
     reach: f32,
@@ -300,9 +297,9 @@ pub fn proxy_channels(
                     }
                     let inner_reach = if reach > 0.0 { near.min(reach) } else { near };
                     let (inner, at) = face_occlusion(p, n, face_centre, f, (b, c), inner_reach);
-                    // One of several boxes filling a solid: a receiver that near its face lies
-                    // on the solid's surface (`splat.wgsl`).
-                    if inner > 0.0 && (!articulated || f.dot(p - face_centre) > tolerance) {
+                    // One of several boxes filling one object: a receiver that near its face
+                    // lies on the object's surface (`splat.wgsl`).
+                    if inner > 0.0 && (!by_union || f.dot(p - face_centre) > tolerance) {
                         occlusion[0] +=
                             inner * (1.0 - (held.point)(at, tolerance) * (held.face)(at, f));
                     }

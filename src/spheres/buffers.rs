@@ -16,6 +16,7 @@ use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
 use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
+use super::join::{ProxyJoin, proxy_joins};
 
 /// One proxy as `splat.wgsl` reads it (`Proxy`).
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -25,11 +26,14 @@ pub(super) struct GpuSphere {
     centre_bound: Vec4,
     /// The three half-extent vectors, metres.
     axes: [Vec4; 3],
-    /// The kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and 1 for a proxy of a
-    /// skinned mesh (see [`OccluderSpheres::articulated`]).
+    /// The kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and how the proxy joins
+    /// the others ([`ProxyJoin`]: 0 independent, 1 by the union, 2 by the union outside
+    /// `union_bounds`).
     kind: Vec4,
     /// The mesh's `RenderLayers` as bits (see [`layer_bits`]), then padding.
     layers: UVec4,
+    /// Under [`ProxyJoin::UnionOutside`], the box's lower and upper corners, metres.
+    union_bounds: [Vec4; 2],
 }
 
 /// Every sphere of every occluder this frame, in one buffer all views share.
@@ -53,8 +57,15 @@ pub(crate) fn extract_spheres(
     occluders: Extract<Query<(&OccluderSpheres, Option<&RenderLayers>)>>,
 ) {
     buffer.buffer.clear();
-    for (occluder, layers) in &occluders {
+    let occluders: Vec<_> = occluders.iter().collect();
+    let joins = proxy_joins(occluders.iter().map(|(o, _)| *o));
+    for ((occluder, layers), join) in occluders.into_iter().zip(joins) {
         let layers = layer_bits(layers).extend(0).extend(0);
+        let (join, union_bounds) = match join {
+            ProxyJoin::Independent => (0.0, [Vec4::ZERO; 2]),
+            ProxyJoin::Union => (1.0, [Vec4::ZERO; 2]),
+            ProxyJoin::UnionOutside { lo, hi } => (2.0, [lo.extend(0.0), hi.extend(0.0)]),
+        };
         for proxy in &occluder.spheres {
             let d_far = match occluder.reach {
                 ProxyReach::CameraRadius => 0.0,
@@ -71,8 +82,9 @@ pub(crate) fn extract_spheres(
                     proxy.axes.y_axis.extend(0.0),
                     proxy.axes.z_axis.extend(0.0),
                 ],
-                kind: Vec4::new(kind, d_far, f32::from(u8::from(occluder.articulated)), 0.0),
+                kind: Vec4::new(kind, d_far, join, 0.0),
                 layers,
+                union_bounds,
             });
         }
     }

@@ -135,9 +135,11 @@ pub struct OccluderSpheres {
     pub reach: ProxyReach,
     /// The mesh is skinned, or encloses a volume with more than one proxy: its proxies stand one
     /// behind another as a receiver sees them (an arm before the torso, a ring's near side
-    /// before its far side), and compose takes their union rather than their product. The
-    /// proxies of other meshes (one box each, or open meshes such as a room's walls, which
-    /// surround a receiver from different directions) join as independent occluders.
+    /// before its far side), and compose takes their union rather than their product,
+    /// everywhere. An open mesh with several proxies (a frame, a room, whose walls surround a
+    /// receiver inside it) joins them by the union only where the receiver lies outside them,
+    /// and a mesh with one proxy joins as an independent occluder but where it stands inside
+    /// such a mesh's proxies ([`join`](super::join) says which).
     pub articulated: bool,
 }
 

@@ -19,11 +19,14 @@ struct Proxy {
     centre_bound: vec4<f32>,
     // Half-extent vectors of a box (world space, metres); a sphere's radius × the identity.
     axes: array<vec4<f32>, 3>,
-    // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius; z: 1 for a
-    // proxy of a skinned mesh, whose proxies compose joins by their union.
+    // x: 0 box, 1 sphere; y: eq. 5's d_far (metres), or 0 for the camera's radius; z: how the
+    // proxy joins the others (`spheres::join`): 0 as an independent occluder, 1 by their union,
+    // 2 by their union where the receiver lies outside `union_bounds`.
     kind: vec4<f32>,
     // xy: the mesh's RenderLayers as bits (`seen_by_view`).
     layers: vec4<u32>,
+    // The lower and upper corners of the box of `kind.z` 2 (world space, metres).
+    union_bounds: array<vec4<f32>, 2>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -147,12 +150,20 @@ fn seen_face(vs: ViewSettings, x: vec3<f32>, f: vec3<f32>) -> f32 {
     return clamp(abs(dot(normalize(to_eye), f)) / 0.3, 0.0, 1.0);
 }
 
+// Whether the proxy joins the others by their union at the receiver `p` (`ProxyJoin::joins_at`).
+fn joins_by_union(proxy: Proxy, p: vec3<f32>) -> bool {
+    if proxy.kind.z < 1.5 {
+        return proxy.kind.z > 0.5;
+    }
+    return any(p < proxy.union_bounds[0].xyz) || any(p > proxy.union_bounds[1].xyz);
+}
+
 // The proxy's occlusion within `reach`, in two parts: x, the part within the near field's reach
 // where the ND-buffer does not hold it; y, the part beyond the near field's reach, as a share of
 // the directions the near part leaves open (the two parts cover different directions, so they
 // join back into the whole as 1 − (1 − x)(1 − y)). Where the far field counts every occluder, y is
-// all of it.
-fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
+// all of it. `by_union`: the proxy joins the others by their union here (`joins_by_union`).
+fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, by_union: bool, p: vec3<f32>, n: vec3<f32>, reach: f32) -> vec2<f32> {
     let near = vs.near;
     let tolerance = 0.1 * near;
     let centre = proxy.centre_bound.xyz;
@@ -203,14 +214,14 @@ fn proxy_occlusion(vs: ViewSettings, proxy: Proxy, p: vec3<f32>, n: vec3<f32>, r
                 continue;
             }
             let inner = face_occlusion(p, n, face_centre, f, b, c, select(near, min(near, reach), reach > 0.0));
-            // The boxes of a skinned mesh (or of one solid that got several) fill it between them,
-            // each fitting its part loosely: a receiver within the ND-buffer's tolerance of one's
+            // The boxes that join by their union (a skinned mesh's, one solid's that got several,
+            // an object's seen from outside) fill it between them, each fitting its part loosely: a receiver within the ND-buffer's tolerance of one's
             // face lies on that solid's surface, and the face, tilted against it, would cover up
             // to half its sky. What occludes it that near is the solid's own relief, which the
             // near field reads from the ND-buffer; counted here as well, it drew the outlines of
             // a character's leg boxes on its legs and on the floor between them. A lone box fits
             // its mesh exactly, and what stands that near its face (a floor at a wall) is occluded.
-            if inner.occlusion > 0.0 && (proxy.kind.z < 0.5 || dot(f, p - face_centre) > tolerance) {
+            if inner.occlusion > 0.0 && (!by_union || dot(f, p - face_centre) > tolerance) {
                 occlusion.x += inner.occlusion * (1.0 - held(vs, inner.centre, tolerance) * seen_face(vs, inner.centre, f));
             }
             if !one_part {
@@ -249,9 +260,10 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         }
         reach = 0.0;
     }
-    let occlusion = clamp(proxy_occlusion(vs, proxy, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
-    // Blue multiplies the visibilities of skinned meshes' proxies alone, alpha keeps the largest
-    // of their occlusions (blended with max): compose takes their union.
-    let articulated = select(0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y), proxy.kind.z > 0.5);
-    return vec4<f32>(occlusion, articulated, articulated);
+    let by_union = joins_by_union(proxy, p);
+    let occlusion = clamp(proxy_occlusion(vs, proxy, by_union, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
+    // Blue multiplies the visibilities of the proxies that join by their union here, alpha keeps
+    // the largest of their occlusions (blended with max): compose takes their union.
+    let joined = select(0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y), by_union);
+    return vec4<f32>(occlusion, joined, joined);
 }

@@ -11,7 +11,7 @@ use crate::log_capture::assert_logged_once;
 use crate::scenes;
 
 /// The storage binding limit the tests set: 256 KiB (Bevy's own passes need more than 128 KiB),
-/// 2730 sphere proxies or 5461 triangles.
+/// 2048 sphere proxies or 5461 triangles.
 const LIMIT: u64 = 256 << 10;
 
 /// A ball of 1152 triangles.
@@ -77,9 +77,9 @@ fn sphere_proxies_past_the_binding_limit_are_left_out_with_a_warning() {
         LIMIT,
     ));
     assert_logged_once(&[
-        "SphereOccluder proxies: 5120 of 96 bytes each",
+        "SphereOccluder proxies: 5120 of 128 bytes each",
         "max_storage_buffer_binding_size (262144 bytes)",
-        "the last 2390 are left out while it lasts",
+        "the last 3072 are left out while it lasts",
     ]);
     assert!(
         limited

@@ -136,6 +136,12 @@ pub fn ring_on_floor() -> FarScene {
     )
 }
 
+/// A cube frame with a box inside it on a floor ([`scenes::frame_around_box`]): one open rigid
+/// mesh with several proxies, and a mesh within them.
+pub fn frame_on_floor() -> FarScene {
+    plain("frame on floor", scenes::frame_around_box())
+}
+
 /// The project's own skinned walker (`assets/characters/walker.glb`), mid-stride on a floor.
 pub fn walker_on_floor() -> FarScene {
     model_on_floor(

@@ -256,6 +256,63 @@ pub fn heat_sink() -> SceneSpec {
     scene
 }
 
+/// The surface of a cube of side `size` centred on the origin with a square window of side
+/// `window` in each face, no thickness: open and not a solid, as BoxAnimated's outer box is
+/// built. Each face is drawn from both sides (a second triangle turned the other way), so the
+/// view through one window sees the inside of the faces beyond it, which the ray tracer finds.
+pub fn window_frame(size: f32, window: f32) -> Mesh {
+    let (h, w) = (0.5 * size, 0.5 * window);
+    // The ring of one face as four strips, (u, v) rectangles in the face's plane.
+    let strips = [
+        ([-h, -h], [h, -w]),
+        ([-h, w], [h, h]),
+        ([-h, -w], [-w, w]),
+        ([w, -w], [h, w]),
+    ];
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for normal in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
+        // u × v = normal, so the corners in (u, v) order wind counter-clockwise seen from outside.
+        let u = normal.any_orthonormal_vector();
+        let v = normal.cross(u);
+        for (lo, hi) in strips {
+            let base = positions.len() as u32;
+            for (a, b) in [
+                (lo[0], lo[1]),
+                (hi[0], lo[1]),
+                (hi[0], hi[1]),
+                (lo[0], hi[1]),
+            ] {
+                positions.push((normal * h + u * a + v * b).to_array());
+                normals.push(normal.to_array());
+            }
+            indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+            let back = positions.len() as u32;
+            positions.extend_from_within(base as usize..);
+            normals.extend(std::iter::repeat_n((-normal).to_array(), 4));
+            indices.extend([0, 2, 1, 0, 3, 2].map(|i| back + i));
+        }
+    }
+    Mesh::new(
+        bevy::mesh::PrimitiveTopology::TriangleList,
+        bevy::asset::RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
+    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, normals)
+    .with_inserted_indices(bevy::mesh::Indices::U32(indices))
+}
+
+/// A 1 m cube frame (a 0.7 m window in each face, [`window_frame`]) on a floor with a 0.67 ×
+/// 1 × 0.67 m box inside it, seen from a corner: BoxAnimated's outer and inner boxes at 0 s.
+pub fn frame_around_box() -> SceneSpec {
+    SceneSpec::new(Transform::from_xyz(1.6, 1.3, 2.3).looking_at(Vec3::new(0.0, 0.4, 0.0), Vec3::Y))
+        .with(floor(10.0), Transform::IDENTITY)
+        .with(window_frame(1.0, 0.7), Transform::from_xyz(0.0, 0.5, 0.0))
+        .with(
+            Cuboid::new(0.67, 1.0, 0.67),
+            Transform::from_xyz(0.0, 0.5, 0.0),
+        )
+}
+
 /// All scenes with their names.
 pub fn all() -> [(&'static str, SceneSpec); 3] {
     [

@@ -8,6 +8,7 @@ use bevy::mesh::PrimitiveTopology;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
+use bevy_dynamic_ao::spheres::join::{ProxyJoin, proxy_joins};
 
 use bevy::mesh::skinning::SkinnedMesh;
 
@@ -59,7 +60,10 @@ fn bent_column(gpu: &mut Gpu, at: Vec3) {
 }
 
 /// The splat against its CPU twin on rigid occluders (a ball, a lying capsule, a small ball near
-/// the eye) and a skinned column, whose proxies compose joins differently.
+/// the eye, an open cube frame with a box inside it) and a skinned column: compose joins the
+/// column's proxies by their union, the frame's and the box's by their union outside the frame's
+/// proxies and as independent occluders inside them (`spheres::join`), the rest as independent
+/// occluders.
 #[test]
 fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
     let camera = Transform::from_xyz(2.0, 1.8, 2.8).looking_at(Vec3::new(0.0, 0.35, 0.0), Vec3::Y);
@@ -85,6 +89,16 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
             Sphere::new(0.1).mesh().uv(16, 8),
             Transform::from_xyz(0.9, 1.2, 2.3),
             occluder(1),
+        )
+        .with_occluder(
+            crate::scenes::window_frame(0.6, 0.4),
+            Transform::from_xyz(0.9, 0.3, -0.9),
+            occluder(16),
+        )
+        .with_occluder(
+            Cuboid::new(0.4, 0.6, 0.4),
+            Transform::from_xyz(0.9, 0.3, -0.9),
+            occluder(1),
         );
     for orthographic in [false, true] {
         let mut gpu = Gpu::new(&scene, far_field_only());
@@ -104,10 +118,20 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
         let frame = gpu.frame(4);
         let occluders = spheres_of(&mut gpu);
         let count: usize = occluders.iter().map(|o| o.spheres.len()).sum();
-        // Compose joins a skinned mesh's proxies by their union and the rest by their product:
-        // both kinds take part.
-        assert_eq!(occluders.len(), 4);
+        // Compose joins a skinned mesh's proxies by their union, the frame's and the box's by
+        // their union outside the frame's proxies, and the rest by their product: every kind
+        // takes part.
+        assert_eq!(occluders.len(), 6);
         assert_eq!(occluders.iter().filter(|o| o.articulated).count(), 1);
+        let joins = proxy_joins(&occluders);
+        assert_eq!(
+            joins
+                .iter()
+                .filter(|j| matches!(j, ProxyJoin::UnionOutside { .. }))
+                .count(),
+            2,
+            "{joins:?}"
+        );
         assert!(count >= 5, "{count} proxies");
 
         // The far field alone counts every occluder within the camera's radius.
