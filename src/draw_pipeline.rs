@@ -1,4 +1,4 @@
-//! What more than one of the plugin's draw pipelines share: the blend with which far-field
+//! What more than one of the plugin's draw pipelines share: the blends with which far-field
 //! occluders combine, and the full-screen overlays drawn over a view's image.
 
 use bevy::asset::Handle;
@@ -16,6 +16,14 @@ pub(crate) const MULTIPLY_VISIBILITY: BlendComponent = BlendComponent {
     src_factor: BlendFactor::Zero,
     dst_factor: BlendFactor::OneMinusSrc,
     operation: BlendOperation::Add,
+};
+
+/// max(dst, src): the largest single occlusion among the occluders that join by their union
+/// (`geometry::union`), for the union compose takes (the sphere splat's and the fields' alpha).
+pub(crate) const LARGEST_OCCLUSION: BlendComponent = BlendComponent {
+    src_factor: BlendFactor::One,
+    dst_factor: BlendFactor::One,
+    operation: BlendOperation::Max,
 };
 
 /// A full-screen pass that draws `shader`'s fragment stage into a view's image of `format`,

@@ -107,7 +107,7 @@
 //! | | §5.2 splatting, eq. 5 d_far | `spheres/splat.wgsl`, `spheres/component.rs` (`far_field_reach`) |
 //! | | §5.3 refit | `spheres/refit.rs` |
 //! | Malmer et al. 2005 | §3.1 baking | `fields/baker/mod.rs` |
-//! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` (T_clip's axis corrections, not in the paper: `fields/baker/axes.rs`) |
+//! | | §3.2–3.3 lookup, T_clip, blending | `fields/fields.wgsl`, `shaders/cap_occlusion.wgsl` (T_clip's axis corrections, not in the paper: `fields/baker/axes.rs`; the union of objects that fill one another's bounds, not in the paper: `fields/join.rs`) |
 //! | | §3.4 border rescale, interior fill | `fields/baker/paper.rs` |
 //! | Bavoil & Sainz 2008 | horizon-based AO | `horizon/horizon.wgsl` |
 //! | | ray-marched AO | `ray_march/march.wgsl` |
@@ -189,6 +189,7 @@ impl Plugin for DynamicAoPlugin {
         load_shader_library!(app, "shaders/sphere_occlusion.wgsl");
         load_shader_library!(app, "shaders/cap_occlusion.wgsl");
         load_shader_library!(app, "shaders/proxy_occlusion.wgsl");
+        load_shader_library!(app, "shaders/union_join.wgsl");
         load_shader_library!(app, "shaders/joint_upsample.wgsl");
         load_shader_library!(app, "shaders/filter_output.wgsl");
         load_shader_library!(app, "shaders/fine_detail.wgsl");

@@ -11,9 +11,10 @@
 // largest single proxy (everything else hidden behind it) and the product (nothing hidden), a
 // rule measured against ray-traced proxies (see `spheres`); a closed rigid mesh with several
 // proxies (a ring) joins them the same way, and an open one (a frame, a room) where the receiver
-// lies outside its proxies' bounds, with whatever stands inside them (`spheres::join`). Other
-// proxies (walls, floors, boxy props) multiply: inside a room the walls lie in different
-// directions and hide nothing of one another. Counted
+// lies outside its proxies' bounds, with whatever stands inside them (`spheres::join`); so do
+// the AO fields of objects that fill one another's bounds, where the receiver lies outside them
+// (`fields::join`). Other occluders (walls, floors, boxy props) multiply: inside a room the
+// walls lie in different directions and hide nothing of one another. Counted
 // once: within the near field's reach the larger of the near field and the red
 // channel counts, because what the ND-buffer misses is most often the hidden side of what it
 // shows (the two cover the same directions); beyond it, the green channel joins as an
@@ -89,11 +90,11 @@ fn halfway(largest: f32, product: f32) -> f32 {
     return largest + 0.5 * (product - largest);
 }
 
-// Both channels of the proxies' product `occlusion` scaled so that the proxies that join by their
-// union here (`spheres::join`; their product leaves `articulated_open` open, the largest single
-// one blocks `largest`) count halfway between that largest one and their product, and every other
-// proxy joins as an independent occluder.
-fn sphere_union(occlusion: vec2<f32>, articulated_open: f32, largest: f32) -> vec2<f32> {
+// Both channels of the occluders' product `occlusion` scaled so that those that join by their
+// union here (`spheres::join`, `fields::join`; their product leaves `articulated_open` open, the
+// largest single one blocks `largest`) count halfway between that largest one and their product,
+// and every other occluder joins as an independent one.
+fn occluder_union(occlusion: vec2<f32>, articulated_open: f32, largest: f32) -> vec2<f32> {
     let product = 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y);
     if product <= 0.0 {
         return occlusion;
@@ -123,13 +124,14 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     var solid_beyond = 0.0;
     if settings.spheres != 0u {
         let spheres = splat_value(sphere_visibility, splat);
-        let joined = sphere_union(1.0 - spheres.rg, spheres.b, spheres.a);
+        let joined = occluder_union(1.0 - spheres.rg, spheres.b, spheres.a);
         let solid_share = (1.0 - spheres.b) / max(1.0 - spheres.r * spheres.g, 1e-6);
         solid_beyond = joined.y * clamp(solid_share, 0.0, 1.0);
         open *= 1.0 - joined;
     }
     if settings.fields != 0u {
-        open *= splat_value(field_visibility, splat).rg;
+        let fields = splat_value(field_visibility, splat);
+        open *= 1.0 - occluder_union(1.0 - fields.rg, fields.b, fields.a);
     }
     if settings.voxels != 0u {
         open *= 1.0 - textureLoad(voxel_occlusion, pixel, 0).rg;

@@ -17,6 +17,7 @@ use bevy::render::{
 use bytemuck::{Pod, Zeroable};
 
 use super::format::{AoFieldData, CELL_FLOATS};
+use super::join::{ProxyJoin, field_joins, object_bounds};
 use super::systems::ActiveAoField;
 use crate::capabilities::cap_to_storage_binding;
 use crate::memory::DynamicAoGpuMemory;
@@ -36,6 +37,9 @@ pub(crate) struct FieldInstance {
     params: Vec4,
     /// xy: the occluder's `RenderLayers` as bits (see [`layer_bits`]).
     layers: UVec4,
+    /// How the field joins the others ([`ProxyJoin::gpu_form`]): the lower corner of the box of
+    /// `UnionOutside` with the kind in w, then its upper corner (world space, metres).
+    union_bounds: [Vec4; 2],
 }
 
 impl FieldInstance {
@@ -83,7 +87,14 @@ impl FieldInstance {
                 grid_scale.z,
             ),
             layers: layer_bits(layers).extend(0).extend(0),
+            union_bounds: [Vec4::ZERO; 2],
         })
+    }
+
+    /// Sets how the field joins the others.
+    fn join(&mut self, join: ProxyJoin) {
+        let (kind, [lo, hi]) = join.gpu_form();
+        self.union_bounds = [lo.extend(kind), hi.extend(0.0)];
     }
 }
 
@@ -207,6 +218,7 @@ pub(crate) fn extract_fields(
         buffers.dirty = true;
     }
     buffers.instances.clear();
+    let mut bounds = Vec::new();
     for (field, transform, visibility, layers) in &occluders {
         if !visibility.is_none_or(|v| v.get()) {
             continue;
@@ -222,7 +234,16 @@ pub(crate) fn extract_fields(
         let world_from_field = transform.affine() * Affine3A::from_scale(field.baked_scale.recip());
         if let Some(instance) = FieldInstance::new(data, world_from_field, *offset, layers) {
             buffers.instances.push(instance);
+            bounds.push(object_bounds(data, world_from_field));
         }
+    }
+    for (instance, join) in buffers
+        .instances
+        .values_mut()
+        .iter_mut()
+        .zip(field_joins(&bounds))
+    {
+        instance.join(join);
     }
     let max_binding = device.limits().max_storage_buffer_binding_size;
     let len = buffers.instances.len();

@@ -13,7 +13,9 @@
 // clipped by the receiver's tangent plane (T_clip of §3.3.1, `cap_occlusion`). The field holds
 // them twice, for hits within R and within the near field's reach; under `FarFieldBlend::CountOnce`
 // the near part goes to the red channel where the ND-buffer does not hold its occluders, the
-// rest to the green one. Blending multiplies the field buffer by 1 − that (§3.3.2). At half
+// rest to the green one. Blending multiplies the field buffer by 1 − that (§3.3.2); the fields of
+// objects that fill one another's bounds also go to blue and alpha where the receiver lies
+// outside those bounds, for compose's union (`fields::join`). At half
 // resolution (`DynamicAo::half_resolution`) each texel does so for one pixel of its 2 × 2 and
 // compose upsamples the buffer.
 // `reference::fields` is the CPU twin.
@@ -22,6 +24,7 @@
 #import bevy_dynamic_ao::nd_buffer::{decode_normal, world_position, nd_buffer_holds}
 #import bevy_dynamic_ao::cap_occlusion::{cap_occlusion, share_beyond}
 #import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
+#import bevy_dynamic_ao::union_join::{joins_by_union, union_channels}
 
 struct FieldInstance {
     // Unit cube [-1, 1]³ to world: places the grid box.
@@ -38,6 +41,9 @@ struct FieldInstance {
     params: vec4<f32>,
     // xy: the occluder's RenderLayers as bits (`seen_by_view`).
     layers: vec4<u32>,
+    // How the field joins the others (`fields::join`): the lower corner of its union's box with
+    // the kind in w (0 independent, 1 union, 2 union outside the box), then the upper corner.
+    union_bounds: array<vec4<f32>, 2>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;
@@ -237,14 +243,15 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     // standing on a floor) faces another way and gets the field's full value there.
     let fade = 1.0 - s.along * (1.0 - smoothstep(0.0, field.params.x, s.signed_distance));
     let all = cone_occlusion(field, s.far.x, s.far.yzw, normal, n_mesh, s.far_positive, s.far_negative) * fade;
+    let by_union = joins_by_union(field.union_bounds[0].w, field.union_bounds[0].xyz, field.union_bounds[1].xyz, p);
     let near = settings.near_field_radius;
     if near <= 0.0 {
-        return vec4<f32>(0.0, all, 0.0, 0.0);
+        return union_channels(vec2<f32>(0.0, all), by_union);
     }
     let inner = cone_occlusion(field, s.near.x, s.near.yzw, normal, n_mesh, s.near_positive, s.near_negative) * fade;
     // The near part's occluders lie about its mean hit point.
     let at = p + m * s.near_offset;
     let held = nd_buffer_holds(view, front_depth, back_depth, settings.seen_back_layer != 0u, at, 0.1 * near);
     let beyond = min(share_beyond(all, inner) + s.own_surface * (1.0 - fade), 1.0);
-    return vec4<f32>(inner * (1.0 - held), beyond, 0.0, 0.0);
+    return union_channels(vec2<f32>(inner * (1.0 - held), beyond), by_union);
 }

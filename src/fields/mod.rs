@@ -9,7 +9,8 @@
 //!
 //! At render time (§3.1) each occluder with an [`AoField`] draws the back faces of its grid box;
 //! every pixel inside the box reads the field at its world position and the receiver's normal,
-//! and the occluders' visibilities multiply (§3.3.2). [`FieldShading`](crate::FieldShading) on
+//! and the occluders' visibilities multiply (§3.3.2), but for those of objects that fill one
+//! another's bounds ([`join`]). [`FieldShading`](crate::FieldShading) on
 //! the camera picks the occlusion-only shading (2a, §3.2) or the cone (T_clip, §3.3.1, the
 //! default, evaluated in closed form by `shaders/cap_occlusion.wgsl`).
 //!
@@ -65,8 +66,18 @@
 //!   entity's world scale and placed without that scale, so R counts metres whatever units the
 //!   mesh was modelled in. Baked in mesh space, a model in centimetres scaled by 0.01 reached
 //!   0.01 R and cast almost nothing on the floor it stood on.
-//! - **Cells of about the same size along every axis**, within a budget of `resolution`³ cells:
-//!   a floor's thin grid gets fine cells across its height.
+//! - **Cells of about the same size along every axis**, within a budget of `resolution`³ cells,
+//!   and at least [`THIN_AXIS_CELLS`](baker::THIN_AXIS_CELLS) × `resolution` across a thin side:
+//!   a 20 m floor's field at R = 0.75 m gets 12 cells of 13 cm across its height, not 4 of 36 cm,
+//!   whose steps striped the sides of a box standing on it (AnimatedMorphCube on such a floor,
+//!   joined to the default: 0.0156 → 0.0096 RMSE, the default alone 0.0104).
+//! - **Objects that fill another's bounds join by their union.** The product of §3.3.2 counts an
+//!   occluder once only where the objects lie in different directions from the receiver. An object
+//!   that fills another's bounds (BoxAnimated's box, which fills its frame at the start of the
+//!   animation) stands behind it as a receiver outside sees them, and the product counted what
+//!   they share twice: the floor around the frame read darker than with no field (joined to the
+//!   default at R = 2 m, 0.0527 against 0.0215 alone). Outside the outer bounds they now join by
+//!   the union compose takes for a character's proxies ([`join`]): 0.0334.
 //!
 //! A field is rigid: on a skinned or morphed mesh it is baked in the pose the mesh has when it is
 //! first seen (with a warning); animated meshes belong to [`SphereOccluder`](crate::spheres::SphereOccluder)
@@ -77,6 +88,7 @@ mod buffers;
 mod cache;
 mod component;
 pub mod format;
+pub mod join;
 mod loader;
 mod node;
 mod pipeline;

@@ -31,13 +31,14 @@ pub(crate) fn field_pass(
     else {
         return;
     };
-    // Visibility starts at 1 (open) and each occluder multiplies it down.
+    // Visibility starts at 1 (open) and each occluder multiplies it down; alpha, the largest
+    // occlusion among the fields that join by their union, starts at 0.
     let offsets = [view_offset.offset, settings_index.index()];
     record_draw_pass(
         &mut ctx,
         "dynamic_ao_fields",
         &visibility.default_view,
-        bevy::color::LinearRgba::WHITE,
+        bevy::color::LinearRgba::new(1.0, 1.0, 1.0, 0.0),
         bind_group
             .zip(
                 pipeline_cache

@@ -16,7 +16,7 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::buffers::FieldBuffers;
-use crate::draw_pipeline::MULTIPLY_VISIBILITY;
+use crate::draw_pipeline::{LARGEST_OCCLUSION, MULTIPLY_VISIBILITY};
 use crate::settings::FieldShading;
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
@@ -76,9 +76,9 @@ impl FromWorld for FieldPipelines {
                         format: FAR_OCCLUSION_FORMAT,
                         blend: Some(BlendState {
                             color: MULTIPLY_VISIBILITY,
-                            alpha: MULTIPLY_VISIBILITY,
+                            alpha: LARGEST_OCCLUSION,
                         }),
-                        write_mask: ColorWrites::RED | ColorWrites::GREEN,
+                        write_mask: ColorWrites::ALL,
                     })],
                     ..default()
                 }),

@@ -10,7 +10,9 @@ use bevy::math::{Affine3A, Vec3, Vec4};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::fields::AoFieldData;
+use crate::fields::join::{field_joins, object_bounds};
 use crate::geometry::cap::{cap_occlusion, share_beyond};
+use crate::geometry::union::occluder_union;
 use crate::settings::FieldShading;
 
 /// The interpolated content of a field at one point.
@@ -189,8 +191,9 @@ pub fn occluder_occlusion(
 }
 
 /// Combined occlusion of `occluders` at every pixel of the front layer of `nd`, as compose
-/// joins it with the near field off: per part 1 − Π(1 − o_i), then the two parts as
-/// independent occluders. `near` and `use_back` as the view's count-once settings (0: none).
+/// joins it with the near field off: per part 1 − Π(1 − o_i), but for the fields that join by
+/// their union there ([`field_joins`]), then the two parts as independent occluders. `near` and
+/// `use_back` as the view's count-once settings (0: none).
 pub fn field_occlusion(
     nd: &NdBuffer,
     view: &ViewMatrices,
@@ -200,14 +203,25 @@ pub fn field_occlusion(
     use_back: bool,
 ) -> Vec<f32> {
     let held = |x: Vec3, tolerance: f32| nd.holds(view, use_back, x, tolerance);
+    let bounds: Vec<_> = occluders
+        .iter()
+        .map(|(field, transform)| object_bounds(field, *transform))
+        .collect();
+    let joins = field_joins(&bounds);
     nd.per_receiver(view, |receiver| {
         let (p, n) = (receiver.world_position, receiver.texel.normal);
-        let mut open = [1.0f32; 2];
-        for (field, transform) in occluders {
+        let (mut open, mut union_open, mut largest) = ([1.0f32; 2], 1.0f32, 0.0f32);
+        for ((field, transform), join) in occluders.iter().zip(&joins) {
             let parts = occluder_occlusion(field, *transform, p, n, shading, near, &held);
             open[0] *= 1.0 - parts[0];
             open[1] *= 1.0 - parts[1];
+            if join.joins_at(p) {
+                let both = 1.0 - (1.0 - parts[0]) * (1.0 - parts[1]);
+                union_open *= 1.0 - both;
+                largest = largest.max(both);
+            }
         }
-        1.0 - open[0] * open[1]
+        let [a, b] = occluder_union([1.0 - open[0], 1.0 - open[1]], union_open, largest);
+        1.0 - (1.0 - a) * (1.0 - b)
     })
 }

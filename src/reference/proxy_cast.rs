@@ -6,8 +6,9 @@ use bevy::prelude::*;
 
 use crate::geometry::bvh::Bvh;
 use crate::geometry::triangles::{Triangle, triangle_bounds};
+use crate::geometry::union::occluder_union;
 use crate::reference::ground_truth::point_occlusion;
-use crate::reference::spheres::{proxy_occlusion, sphere_union};
+use crate::reference::spheres::proxy_occlusion;
 use crate::spheres::OccluderSphere;
 
 /// Cosine-weighted share of rays from `p` that meet `bvh` within `reach`.
@@ -44,7 +45,7 @@ fn proxies_and_mesh(
             open *= 1.0 - proxy_occlusion(q, p, n, reach).clamp(0.0, 1.0);
         }
         // A rigid mesh's proxies: no skinned proxy, so the union is their product.
-        ours += sphere_union([0.0, 1.0 - open], 1.0, 0.0)[1];
+        ours += occluder_union([0.0, 1.0 - open], 1.0, 0.0)[1];
         theirs += traced(&bvh, p, n, if reach > 0.0 { reach } else { f32::INFINITY });
     }
     (ours / count as f32, theirs / count as f32)

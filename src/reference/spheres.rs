@@ -9,6 +9,7 @@ use bevy::math::{Mat3, Vec2, Vec3};
 
 use super::nd_buffer::{NdBuffer, ViewMatrices};
 use crate::geometry::cap::{cap_occlusion, share_beyond};
+use crate::geometry::union::occluder_union;
 use crate::spheres::join::proxy_joins;
 use crate::spheres::{OccluderSphere, OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
 
@@ -143,29 +144,8 @@ pub struct ProxyCamera {
     pub use_back: bool,
 }
 
-/// The proxies' union, as `compose.wgsl` takes it: both channels of their product
-/// (`occlusion`) scaled so that the proxies that join by their union at the receiver
-/// ([`ProxyJoin`](crate::spheres::join::ProxyJoin); their product leaves `articulated_open` open,
-/// the largest single one blocks `largest`) count halfway between that largest one and their
-/// product, and every other proxy joins as an independent occluder.
-pub fn sphere_union(occlusion: [f32; 2], articulated_open: f32, largest: f32) -> [f32; 2] {
-    let product = 1.0 - (1.0 - occlusion[0]) * (1.0 - occlusion[1]);
-    if product <= 0.0 {
-        return occlusion;
-    }
-    let articulated = 1.0 - articulated_open;
-    let floor = largest.min(articulated);
-    let together = floor + 0.5 * (articulated - floor);
-    let rigid_open = ((1.0 - product) / articulated_open.max(1e-6)).clamp(0.0, 1.0);
-    let total = 1.0 - (1.0 - together) * rigid_open;
-    [
-        occlusion[0] * total / product,
-        occlusion[1] * total / product,
-    ]
-}
-
 /// The far field of sphere occluders at every pixel of the front layer of `nd`, row-major, in
-/// compose's two channels after the union of [`sphere_union`]: the near field's share the
+/// compose's two channels after the union of [`occluder_union`]: the near field's share the
 /// ND-buffer misses, and the rest (see `splat.wgsl`).
 pub fn far_field_channels(
     nd: &NdBuffer,
@@ -199,7 +179,7 @@ pub fn far_field_channels(
                 }
             }
         }
-        sphere_union([1.0 - open[0], 1.0 - open[1]], articulated_open, largest)
+        occluder_union([1.0 - open[0], 1.0 - open[1]], articulated_open, largest)
     })
 }
 

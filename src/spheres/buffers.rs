@@ -16,7 +16,7 @@ use crate::memory::DynamicAoGpuMemory;
 use crate::view::layer_bits;
 
 use super::component::{OccluderSpheres, ProxyReach, ProxyShape, far_field_reach};
-use super::join::{ProxyJoin, proxy_joins};
+use super::join::proxy_joins;
 
 /// One proxy as `splat.wgsl` reads it (`Proxy`).
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -27,12 +27,13 @@ pub(super) struct GpuSphere {
     /// The three half-extent vectors, metres.
     axes: [Vec4; 3],
     /// The kind (0 box, 1 sphere), eq. 5's d_far (0: the camera's radius) and how the proxy joins
-    /// the others ([`ProxyJoin`]: 0 independent, 1 by the union, 2 by the union outside
-    /// `union_bounds`).
+    /// the others ([`ProxyJoin::gpu_form`](crate::geometry::union::ProxyJoin::gpu_form): 0
+    /// independent, 1 by the union, 2 by the union outside `union_bounds`).
     kind: Vec4,
     /// The mesh's `RenderLayers` as bits (see [`layer_bits`]), then padding.
     layers: UVec4,
-    /// Under [`ProxyJoin::UnionOutside`], the box's lower and upper corners, metres.
+    /// Under [`ProxyJoin::UnionOutside`](crate::geometry::union::ProxyJoin::UnionOutside), the
+    /// box's lower and upper corners, metres.
     union_bounds: [Vec4; 2],
 }
 
@@ -61,11 +62,8 @@ pub(crate) fn extract_spheres(
     let joins = proxy_joins(occluders.iter().map(|(o, _)| *o));
     for ((occluder, layers), join) in occluders.into_iter().zip(joins) {
         let layers = layer_bits(layers).extend(0).extend(0);
-        let (join, union_bounds) = match join {
-            ProxyJoin::Independent => (0.0, [Vec4::ZERO; 2]),
-            ProxyJoin::Union => (1.0, [Vec4::ZERO; 2]),
-            ProxyJoin::UnionOutside { lo, hi } => (2.0, [lo.extend(0.0), hi.extend(0.0)]),
-        };
+        let (join, [lo, hi]) = join.gpu_form();
+        let union_bounds = [lo.extend(0.0), hi.extend(0.0)];
         for proxy in &occluder.spheres {
             let d_far = match occluder.reach {
                 ProxyReach::CameraRadius => 0.0,

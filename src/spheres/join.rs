@@ -24,6 +24,7 @@
 use bevy::math::Vec3;
 
 use super::component::OccluderSpheres;
+pub use crate::geometry::union::ProxyJoin;
 
 /// Grows a mesh's proxy bounds on every side by this share of their longest side before a
 /// receiver is tested against them: receivers on the mesh's own outer surface, which the shrunk
@@ -33,34 +34,6 @@ const RECEIVER_MARGIN: f32 = 0.02;
 /// share of their longest side (the box inside a frame reaches the frame's faces, which the
 /// frame's shrunk proxies do not).
 const NEST_MARGIN: f32 = 0.05;
-
-/// How one mesh's proxies join the others' (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ProxyJoin {
-    /// As independent occluders, everywhere.
-    Independent,
-    /// By the union, everywhere.
-    Union,
-    /// By the union where the receiver lies outside the box `lo`–`hi` (world space, metres,
-    /// grown by the receiver margin), as independent occluders inside it.
-    UnionOutside {
-        /// The box's lower corner.
-        lo: Vec3,
-        /// The box's upper corner.
-        hi: Vec3,
-    },
-}
-
-impl ProxyJoin {
-    /// Whether the proxies join by the union at the receiver `p`.
-    pub fn joins_at(&self, p: Vec3) -> bool {
-        match *self {
-            Self::Independent => false,
-            Self::Union => true,
-            Self::UnionOutside { lo, hi } => p.cmplt(lo).any() || p.cmpgt(hi).any(),
-        }
-    }
-}
 
 /// The box that bounds every proxy of `occluder` (world space, metres), `None` where it has none
 /// or one that is not finite.

@@ -16,7 +16,7 @@ use bevy::render::{
 use bevy::utils::default;
 
 use super::buffers::SphereBuffer;
-use crate::draw_pipeline::MULTIPLY_VISIBILITY;
+use crate::draw_pipeline::{LARGEST_OCCLUSION, MULTIPLY_VISIBILITY};
 use crate::view::{
     DynamicAoTextures, DynamicAoUniform, DynamicAoView, FAR_OCCLUSION_FORMAT, FarTerm, ViewBindings,
 };
@@ -46,13 +46,6 @@ impl FromWorld for SplatPipeline {
             ),
         );
         let shader = load_embedded_asset!(world, "splat.wgsl");
-        // max(dst, src): the largest single occlusion of a skinned mesh's proxy, for the union
-        // estimate in compose.
-        let largest = BlendComponent {
-            src_factor: BlendFactor::One,
-            dst_factor: BlendFactor::One,
-            operation: BlendOperation::Max,
-        };
         let pipeline =
             world
                 .resource::<PipelineCache>()
@@ -69,7 +62,7 @@ impl FromWorld for SplatPipeline {
                             format: FAR_OCCLUSION_FORMAT,
                             blend: Some(BlendState {
                                 color: MULTIPLY_VISIBILITY,
-                                alpha: largest,
+                                alpha: LARGEST_OCCLUSION,
                             }),
                             write_mask: ColorWrites::ALL,
                         })],

@@ -13,6 +13,7 @@
 #import bevy_dynamic_ao::proxy_occlusion::{face_normal, face_occlusion, sphere_occlusion_within}
 #import bevy_dynamic_ao::uniform::{DynamicAoUniform, seen_by_view}
 #import bevy_dynamic_ao::cap_occlusion::share_beyond
+#import bevy_dynamic_ao::union_join::{joins_by_union, union_channels}
 
 struct Proxy {
     // Centre (world space, metres) and the radius of a sphere holding the whole proxy.
@@ -150,14 +151,6 @@ fn seen_face(vs: ViewSettings, x: vec3<f32>, f: vec3<f32>) -> f32 {
     return clamp(abs(dot(normalize(to_eye), f)) / 0.3, 0.0, 1.0);
 }
 
-// Whether the proxy joins the others by their union at the receiver `p` (`ProxyJoin::joins_at`).
-fn joins_by_union(proxy: Proxy, p: vec3<f32>) -> bool {
-    if proxy.kind.z < 1.5 {
-        return proxy.kind.z > 0.5;
-    }
-    return any(p < proxy.union_bounds[0].xyz) || any(p > proxy.union_bounds[1].xyz);
-}
-
 // The proxy's occlusion within `reach`, in two parts: x, the part within the near field's reach
 // where the ND-buffer does not hold it; y, the part beyond the near field's reach, as a share of
 // the directions the near part leaves open (the two parts cover different directions, so they
@@ -260,10 +253,7 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         }
         reach = 0.0;
     }
-    let by_union = joins_by_union(proxy, p);
+    let by_union = joins_by_union(proxy.kind.z, proxy.union_bounds[0].xyz, proxy.union_bounds[1].xyz, p);
     let occlusion = clamp(proxy_occlusion(vs, proxy, by_union, p, normal, reach), vec2<f32>(0.0), vec2<f32>(1.0));
-    // Blue multiplies the visibilities of the proxies that join by their union here, alpha keeps
-    // the largest of their occlusions (blended with max): compose takes their union.
-    let joined = select(0.0, 1.0 - (1.0 - occlusion.x) * (1.0 - occlusion.y), by_union);
-    return vec4<f32>(occlusion, joined, joined);
+    return union_channels(occlusion, by_union);
 }

@@ -4,13 +4,15 @@
 //! tests and benchmark.
 #![allow(dead_code)]
 
+use bevy::math::Affine3A;
 use bevy::prelude::*;
-use bevy_dynamic_ao::fields::{ActiveAoField, PendingAoField};
+use bevy_dynamic_ao::fields::{ActiveAoField, AoFieldData, PendingAoField};
+use bevy_dynamic_ao::geometry::union::occluder_union;
 use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     posed::{posed_triangles, posed_triangles_of},
-    spheres::{proxy_occlusion, sphere_union},
+    spheres::proxy_occlusion,
 };
 use bevy_dynamic_ao::spheres::OccluderSphere;
 
@@ -414,7 +416,7 @@ pub fn proxies_on_floor(proxies: &[OccluderSphere], p: Vec3, reach: f32) -> [f32
     [
         1.0 - open,
         largest,
-        sphere_union([0.0, 1.0 - open], open, largest)[1],
+        occluder_union([0.0, 1.0 - open], open, largest)[1],
     ]
 }
 
@@ -442,4 +444,23 @@ pub fn voxel_scenes() -> Vec<(FarScene, Option<String>)> {
         }
     }
     scenes
+}
+
+/// Every AO field occluder's data and the transform that places it in the world.
+pub fn placed_fields(gpu: &mut Gpu) -> Vec<(AoFieldData, Affine3A)> {
+    let world = gpu.app.world_mut();
+    let mut query = world.query::<(&ActiveAoField, &GlobalTransform)>();
+    let placed: Vec<_> = query
+        .iter(world)
+        .map(|(active, transform)| {
+            // A baked field lies in the mesh's space scaled to the world's size.
+            let placement = transform.affine() * Affine3A::from_scale(active.baked_scale.recip());
+            (active.field.id(), placement)
+        })
+        .collect();
+    let fields = world.resource::<Assets<AoFieldData>>();
+    placed
+        .into_iter()
+        .map(|(id, placement)| (fields.get(id).expect("a baked field").clone(), placement))
+        .collect()
 }

@@ -7,12 +7,14 @@ use bevy::asset::LoadState;
 use bevy::math::Affine3A;
 use bevy::prelude::*;
 use bevy_dynamic_ao::FieldShading;
+use bevy_dynamic_ao::fields::join::{ProxyJoin, field_joins, object_bounds};
 use bevy_dynamic_ao::fields::{AoFieldCache, AoFieldData, BakeSettings, bake};
 use bevy_dynamic_ao::geometry::triangles::TriangleScene;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
 
 use crate::examples::example_binary;
+use crate::far_scenes::placed_fields;
 use crate::harness::{Gpu, difference_stats, gpu_turn, plain_ao};
 use crate::log_capture::assert_logged_once;
 use crate::scenes;
@@ -206,27 +208,32 @@ fn gpu_with_fields(scene: &crate::harness::SceneSpec, ao: DynamicAo) -> Gpu {
 }
 
 /// Every field occluder's data and world transform.
-fn occluders(gpu: &mut Gpu) -> Vec<(AoFieldData, Affine3A)> {
-    let world = gpu.app.world_mut();
-    let fields = world.resource::<Assets<AoFieldData>>();
-    let all: Vec<AoFieldData> = fields.iter().map(|(_, f)| f.clone()).collect();
-    let mut out = Vec::new();
-    let mut query = world.query_filtered::<&GlobalTransform, With<AoField>>();
-    for transform in query.iter(world) {
-        out.push((all[0].clone(), transform.affine()));
-    }
-    out
-}
-
+/// The GPU's fields against `reference::fields` on the same ND-buffer: a cube's field on the
+/// plane, with both shadings, and every mesh of a frame around a box a field (the frame and the
+/// box within it join by their union outside the frame's bounds, `fields::join`).
 #[test]
 fn gpu_fields_match_the_cpu_evaluation() {
-    let mut scene = scenes::cube_on_plane();
-    scene.fields.push((1, quick_field()));
-    for shading in [FieldShading::Cone, FieldShading::OcclusionOnly] {
-        let mut gpu = gpu_with_fields(&scene, fields_only(shading));
+    let mut cube = scenes::cube_on_plane();
+    cube.fields.push((1, quick_field()));
+    let mut nested = scenes::frame_around_box();
+    nested.fields = (0..3).map(|mesh| (mesh, quick_field())).collect();
+    let runs = [
+        (&cube, FieldShading::Cone),
+        (&cube, FieldShading::OcclusionOnly),
+        (&nested, FieldShading::Cone),
+    ];
+    for (scene, shading) in runs {
+        let mut gpu = gpu_with_fields(scene, fields_only(shading));
         let frame = gpu.frame(4);
-        let placed = occluders(&mut gpu);
+        let placed = placed_fields(&mut gpu);
         let refs: Vec<(&AoFieldData, Affine3A)> = placed.iter().map(|(f, t)| (f, *t)).collect();
+        let bounds: Vec<_> = refs.iter().map(|(f, t)| object_bounds(f, *t)).collect();
+        let unions = field_joins(&bounds)
+            .iter()
+            .filter(|join| matches!(join, ProxyJoin::UnionOutside { .. }))
+            .count();
+        let expected = if std::ptr::eq(scene, &nested) { 2 } else { 0 };
+        assert_eq!(unions, expected, "the frame and its box");
         // The field alone counts every occluder within the camera's radius.
         let cpu: Vec<f32> = field_occlusion(&frame.nd, &frame.view, &refs, shading, 0.0, false)
             .into_iter()

@@ -280,14 +280,32 @@ fn a_finite_reach_counts_only_near_hits_and_ends_the_grid_where_nothing_reaches(
 }
 
 #[test]
-fn flat_objects_get_flat_grids_of_about_cubic_cells() {
-    let res = grid_resolution(Vec3::new(10.75, 0.75, 10.75), 32);
+fn thin_axes_get_a_least_number_of_cells_and_the_rest_share_the_budget() {
+    // A 20 m floor at R = 0.75 m: cubic cells would cross its 1.5 m height in 4 cells of 36 cm.
+    let floor = grid_resolution(Vec3::new(10.75, 0.75, 10.75), 32);
+    assert_eq!(floor.y, 12, "{floor}");
     assert!(
-        res.y >= 4 && res.y <= 8 && res.x == res.z && res.x > 60,
-        "{res}"
+        floor.x == floor.z && (50..=52).contains(&floor.x),
+        "{floor}"
     );
-    let cube = grid_resolution(Vec3::splat(1.0), 32);
-    assert_eq!(cube, UVec3::splat(32));
+    assert!(floor.element_product() <= 32 * 32 * 32, "{floor}");
+    // A 10 m wall 10 cm thick: only its thickness is raised; the rest keep their cubic cells.
+    let wall = grid_resolution(Vec3::new(5.75, 2.25, 0.8), 32);
+    assert_eq!(wall, UVec3::new(64, 25, 12));
+    // A 10 m pole: both thin axes raised, the long one keeps its cells.
+    let pole = grid_resolution(Vec3::new(0.8, 5.75, 0.8), 32);
+    assert_eq!(pole, UVec3::new(12, 64, 12));
+    // Objects of about equal sides keep cubic cells.
+    assert_eq!(grid_resolution(Vec3::splat(1.0), 32), UVec3::splat(32));
+    assert_eq!(
+        grid_resolution(Vec3::new(2.35, 1.2, 1.25), 32),
+        UVec3::new(49, 25, 26)
+    );
+    // Tiny budgets keep at least 2 cells an axis.
+    assert_eq!(
+        grid_resolution(Vec3::new(10.0, 0.1, 10.0), 2),
+        UVec3::new(2, 2, 2)
+    );
 }
 
 #[test]
