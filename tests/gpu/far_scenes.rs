@@ -353,6 +353,9 @@ impl FarRun {
             FarTerm::select(far, ao);
         });
         self.settle();
+        // The history starts over once every field is baked: how many frames the bakes took
+        // (which depends on the machine's load) does not move where the accumulation stands.
+        self.gpu.set_ao(|ao| ao.temporal.reset = true);
         // Accumulated occlusion is read once converged.
         self.gpu.frame(if near {
             converged_frames(&image_space)
