@@ -10,7 +10,6 @@ use bevy_dynamic_ao::fields::join::{field_joins, object_bounds};
 use bevy_dynamic_ao::geometry::bvh::Bvh;
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::fields::field_occlusion;
-use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
 use bevy_dynamic_ao::reference::{
     ground_truth::{camera_ray, point_occlusion},
     metrics::rmse,
@@ -355,10 +354,8 @@ fn a_ring_on_a_floor_gains_from_its_proxies_and_its_field() {
     let scene = far_scenes::ring_on_floor();
     let mut run = FarRun::new(&scene, None);
     let bvh = run.bvh();
-    let world = run.gpu.app.world_mut();
-    let solids: Vec<bool> = world
-        .query::<&OccluderSpheres>()
-        .iter(world)
+    let solids: Vec<bool> = far_scenes::spheres_of(&mut run.gpu)
+        .iter()
         .map(|s| s.articulated)
         .collect();
     assert_eq!(
@@ -432,12 +429,7 @@ fn a_frame_and_the_box_inside_it_join_by_their_union_outside_it() {
     let scene = far_scenes::frame_on_floor();
     let mut run = FarRun::new(&scene, None);
     let bvh = run.bvh();
-    let world = run.gpu.app.world_mut();
-    let occluders: Vec<OccluderSpheres> = world
-        .query::<&OccluderSpheres>()
-        .iter(world)
-        .cloned()
-        .collect();
+    let occluders = far_scenes::spheres_of(&mut run.gpu);
     let joins = proxy_joins(&occluders);
     let frame = occluders
         .iter()
@@ -476,15 +468,7 @@ fn a_frame_and_the_box_inside_it_join_by_their_union_outside_it() {
         let truth = spheres.ground_truth(&bvh, radius);
         let around = floor_around_frame(&spheres);
         let error = |visibility: &[f32]| rmse(visibility, &truth, Some(&around));
-        let camera = ProxyCamera {
-            radius,
-            near_radius: 0.0,
-            use_back: false,
-        };
-        let product: Vec<f32> = far_field_occlusion(&spheres.nd, &spheres.view, &apart, &camera)
-            .into_iter()
-            .map(|o| 1.0 - o.min(1.0))
-            .collect();
+        let product = far_scenes::cpu_sphere_visibility(&spheres, &apart, radius);
         let (ours, theirs) = (error(&spheres.visibility), error(&product));
         println!(
             "frame on floor, R = {radius} m, the floor around it: RMSE spheres {ours:.4}, \

@@ -12,7 +12,7 @@ use bevy_dynamic_ao::geometry::{bvh::Bvh, triangles::TriangleScene};
 use bevy_dynamic_ao::prelude::*;
 use bevy_dynamic_ao::reference::{
     posed::{posed_triangles, posed_triangles_of},
-    spheres::proxy_occlusion,
+    spheres::{ProxyCamera, far_field_occlusion, proxy_occlusion},
 };
 use bevy_dynamic_ao::spheres::OccluderSphere;
 
@@ -465,5 +465,33 @@ pub fn placed_fields(gpu: &mut Gpu) -> Vec<(AoFieldData, Affine3A)> {
     placed
         .into_iter()
         .map(|(id, placement)| (fields.get(id).expect("a baked field").clone(), placement))
+        .collect()
+}
+
+/// Every mesh's sphere occluders as they are now.
+pub fn spheres_of(gpu: &mut Gpu) -> Vec<OccluderSpheres> {
+    let world = gpu.app.world_mut();
+    world
+        .query::<&OccluderSpheres>()
+        .iter(world)
+        .cloned()
+        .collect()
+}
+
+/// Visibility at every pixel of `frame` from the CPU twin of the sphere splat and compose, the
+/// near field off, every proxy of `occluders` counting within `radius`.
+pub fn cpu_sphere_visibility(
+    frame: &Frame,
+    occluders: &[OccluderSpheres],
+    radius: f32,
+) -> Vec<f32> {
+    let camera = ProxyCamera {
+        radius,
+        near_radius: 0.0,
+        use_back: false,
+    };
+    far_field_occlusion(&frame.nd, &frame.view, occluders, &camera)
+        .into_iter()
+        .map(|o| 1.0 - o.min(1.0))
         .collect()
 }

@@ -7,11 +7,11 @@ use bevy::asset::RenderAssetUsages;
 use bevy::mesh::PrimitiveTopology;
 use bevy::prelude::*;
 use bevy_dynamic_ao::prelude::*;
-use bevy_dynamic_ao::reference::spheres::{ProxyCamera, far_field_occlusion};
 use bevy_dynamic_ao::spheres::join::{ProxyJoin, proxy_joins};
 
 use bevy::mesh::skinning::SkinnedMesh;
 
+use crate::far_scenes::{cpu_sphere_visibility, spheres_of};
 use crate::harness::{Gpu, SceneSpec, difference_stats, plain_ao};
 use crate::skinned::{LENGTH, column, column_bindposes};
 
@@ -24,15 +24,6 @@ fn far_field_only() -> DynamicAo {
         technique: AoTechnique::Off,
         ..plain_ao()
     }
-}
-
-fn spheres_of(gpu: &mut Gpu) -> Vec<OccluderSpheres> {
-    let world = gpu.app.world_mut();
-    world
-        .query::<&OccluderSpheres>()
-        .iter(world)
-        .cloned()
-        .collect()
 }
 
 /// A skinned column standing at `at`, bent 1 rad at its elbow so that its two bones' boxes stand
@@ -135,15 +126,7 @@ fn splat_matches_the_cpu_formula_on_the_same_nd_buffer() {
         assert!(count >= 5, "{count} proxies");
 
         // The far field alone counts every occluder within the camera's radius.
-        let camera = ProxyCamera {
-            radius: plain_ao().radius,
-            near_radius: 0.0,
-            use_back: false,
-        };
-        let cpu: Vec<f32> = far_field_occlusion(&frame.nd, &frame.view, &occluders, &camera)
-            .into_iter()
-            .map(|o| 1.0 - o.min(1.0))
-            .collect();
+        let cpu = cpu_sphere_visibility(&frame, &occluders, plain_ao().radius);
         let mask = frame.geometry_mask();
         let (mean, p99) = difference_stats(&frame.visibility, &cpu, &mask);
         let darkest = cpu.iter().copied().fold(1.0, f32::min);
